@@ -1,0 +1,547 @@
+"""The hot loops, compiled with Numba. Everything else is numpy/OpenCV.
+
+Conventions: angles in radians; a gradient angle is ``atan2(gy, gx)`` in
+[0, 2 pi); equation 1 maps a pattern point p to ``t + rho R(phi) p`` with
+``R(phi) = [[cos, sin], [-sin, cos]]``, which turns a pattern gradient of
+angle ``a`` into an image gradient of angle ``a - phi``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+TWO_PI = 2.0 * math.pi
+
+MODE_ORIENTED = 0
+MODE_POINTS = 1
+MODE_SEGMENTS = 2
+
+
+@njit(cache=True)
+def _wrap_pi(a):
+    """Angle wrapped to [-pi, pi)."""
+    return (a + math.pi) % TWO_PI - math.pi
+
+
+# --------------------------------------------------------------------------- edges
+@njit(cache=True)
+def edge_points(mag, gx, gy, floor):
+    """Non-maximum suppression across the edge, with sub-pixel position.
+
+    Returns ``(x, y, angle, magnitude, ix, iy)`` of every pixel whose gradient
+    magnitude is at least ``floor`` and is a local maximum along its gradient
+    direction (quantised to 4 directions, as Canny does). The sub-pixel offset
+    along that direction comes from a parabola through the three magnitudes.
+    """
+    h, w = mag.shape
+    n = 0
+    for y in range(1, h - 1):
+        for x in range(1, w - 1):
+            if mag[y, x] >= floor:
+                n += 1
+    xs = np.empty(n, np.float32)
+    ys = np.empty(n, np.float32)
+    an = np.empty(n, np.float32)
+    mg = np.empty(n, np.float32)
+    ix = np.empty(n, np.int32)
+    iy = np.empty(n, np.int32)
+    k = 0
+    t22 = 0.41421356  # tan(22.5 deg)
+    for y in range(1, h - 1):
+        for x in range(1, w - 1):
+            m = mag[y, x]
+            if m < floor:
+                continue
+            ggx = gx[y, x]
+            ggy = gy[y, x]
+            agx = abs(ggx)
+            agy = abs(ggy)
+            if agy <= t22 * agx:
+                sx, sy = 1, 0
+            elif agx <= t22 * agy:
+                sx, sy = 0, 1
+            elif (ggx > 0) == (ggy > 0):
+                sx, sy = 1, 1
+            else:
+                sx, sy = 1, -1
+            m1 = mag[y - sy, x - sx]
+            m2 = mag[y + sy, x + sx]
+            if not (m >= m1 and m > m2):
+                continue
+            den = m1 - 2.0 * m + m2
+            off = 0.0
+            if den < 0.0:
+                off = 0.5 * (m1 - m2) / den
+                if off > 0.5:
+                    off = 0.5
+                elif off < -0.5:
+                    off = -0.5
+            xs[k] = x + off * sx
+            ys[k] = y + off * sy
+            a = math.atan2(ggy, ggx)
+            if a < 0.0:
+                a += TWO_PI
+            an[k] = a
+            mg[k] = m
+            ix[k] = x
+            iy[k] = y
+            k += 1
+    return xs[:k], ys[:k], an[:k], mg[:k], ix[:k], iy[:k]
+
+
+@njit(cache=True)
+def trace_segments(seeds, ix, iy, ang, mag, index, steps, tol):
+    """Trace a short segment along the edge from each seed edge point.
+
+    From a key point, step to the 8-neighbour that lies along the edge
+    (perpendicular to the gradient), is an edge point with about the same
+    gradient direction (within ``tol``) and has the highest magnitude; repeat
+    ``steps`` times on each side.
+
+    Returns ``(seed, end1, end2, mean_angle, length)`` for the seeds from
+    which at least two steps could be taken; ``end1``/``end2`` are edge point
+    ids, ``length`` the number of steps.
+    """
+    n = seeds.shape[0]
+    h, w = index.shape
+    out_seed = np.empty(n, np.int32)
+    out_e1 = np.empty(n, np.int32)
+    out_e2 = np.empty(n, np.int32)
+    out_ang = np.empty(n, np.float32)
+    out_len = np.empty(n, np.int32)
+    k = 0
+    for si in range(n):
+        s = seeds[si]
+        sc = math.cos(ang[s])
+        ss = math.sin(ang[s])
+        ends = np.empty(2, np.int32)
+        total = 0
+        for side in range(2):
+            sign = 1.0 if side == 0 else -1.0
+            tx = -ss * sign
+            ty = sc * sign
+            cur = s
+            for _ in range(steps):
+                cx = ix[cur]
+                cy = iy[cur]
+                best = -1
+                bestm = -1.0
+                for dy in range(-1, 2):
+                    for dx in range(-1, 2):
+                        if dx == 0 and dy == 0:
+                            continue
+                        if dx * tx + dy * ty <= 0.38 * math.sqrt(dx * dx + dy * dy):
+                            continue
+                        nx = cx + dx
+                        ny = cy + dy
+                        if nx < 0 or ny < 0 or nx >= w or ny >= h:
+                            continue
+                        j = index[ny, nx]
+                        if j < 0:
+                            continue
+                        if abs(_wrap_pi(ang[j] - ang[cur])) > tol:
+                            continue
+                        if mag[j] > bestm:
+                            bestm = mag[j]
+                            best = j
+                if best < 0:
+                    break
+                # keep walking the same way along the (possibly curving) edge
+                ntx = -math.sin(ang[best])
+                nty = math.cos(ang[best])
+                if ntx * tx + nty * ty < 0:
+                    ntx = -ntx
+                    nty = -nty
+                tx = ntx
+                ty = nty
+                sc += math.cos(ang[best])
+                ss += math.sin(ang[best])
+                cur = best
+                total += 1
+            ends[side] = cur
+        if total >= 2:
+            out_seed[k] = s
+            out_e1[k] = ends[0]
+            out_e2[k] = ends[1]
+            a = math.atan2(ss, sc)
+            if a < 0.0:
+                a += TWO_PI
+            out_ang[k] = a
+            out_len[k] = total
+            k += 1
+    return out_seed[:k], out_e1[:k], out_e2[:k], out_ang[:k], out_len[:k]
+
+
+@njit(cache=True)
+def spread_points(x, y, order, min_dist, max_count):
+    """Greedy Poisson-disc thinning: visit points in ``order`` and keep one
+    when no kept point lies within ``min_dist``. Returns kept indices."""
+    n = x.shape[0]
+    if n == 0:
+        return np.empty(0, np.int64)
+    cell = max(min_dist, 1e-3)
+    x0 = x.min()
+    y0 = y.min()
+    gw = int((x.max() - x0) / cell) + 3
+    gh = int((y.max() - y0) / cell) + 3
+    head = -np.ones(gw * gh, np.int64)
+    nxt = np.empty(n, np.int64)
+    kept = np.empty(min(n, max_count), np.int64)
+    nk = 0
+    d2 = min_dist * min_dist
+    for oi in range(n):
+        if nk >= max_count:
+            break
+        i = order[oi]
+        cx = int((x[i] - x0) / cell) + 1
+        cy = int((y[i] - y0) / cell) + 1
+        ok = True
+        for gy in range(cy - 1, cy + 2):
+            for gx in range(cx - 1, cx + 2):
+                j = head[gy * gw + gx]
+                while j >= 0:
+                    ddx = x[j] - x[i]
+                    ddy = y[j] - y[i]
+                    if ddx * ddx + ddy * ddy < d2:
+                        ok = False
+                        break
+                    j = nxt[j]
+                if not ok:
+                    break
+            if not ok:
+                break
+        if ok:
+            c = cy * gw + cx
+            nxt[i] = head[c]
+            head[c] = i
+            kept[nk] = i
+            nk += 1
+    return kept[:nk]
+
+
+# --------------------------------------------------------------------------- voting
+@njit(cache=True, fastmath=True)
+def vote(px, py, pang, pw, p2x, p2y,
+         qx, qy, qang, q2x, q2y, qstart, n_abins,
+         phis, phi_half, rhos, log_rho0, log_step, mode,
+         tx0, ty0, tbin, nw, nh,
+         best_val, best_k, best_d, proj_sr):
+    """Fill the 4-D accumulator (phi, rho, dy, dx), one rotation slice at a time.
+
+    Pattern points ``p`` (relative to the pattern origin, working pixels) are
+    paired with image segments ``q`` whose edge direction is compatible with
+    the slice's rotation ``phis[d]`` (within ``phi_half``); image segments are
+    sorted by angle bin (``qstart``: CSR offsets of ``n_abins`` bins).
+
+    ``mode`` MODE_ORIENTED: the pair's own rotation (pattern angle minus image
+    angle) and a cycle over ``rhos``; MODE_POINTS: the slice's rotation and a
+    cycle over ``rhos`` (the paper's point voting); MODE_SEGMENTS: equation 5
+    on the pattern segment (p, p2) and image segment (q, q2), one vote.
+
+    Each slice is a small 3-D array (rho, dy, dx) that stays in cache; after
+    filling it, every 2x2 block of translation bins is summed and reduced
+    into ``best_val/best_k/best_d`` (the dx-dy plane: best height over scale
+    and rotation, and where) and ``proj_sr`` (the rho-phi plane: best height
+    over translation). Votes are weighted by ``pw``.
+    """
+    n_rho = rhos.shape[0]
+    n_phi = phis.shape[0]
+    np_ = px.shape[0]
+    nq = qx.shape[0]
+    abin = TWO_PI / n_abins
+    inv = 1.0 / tbin
+    # image side in bin units, and unit direction vectors
+    qxs = np.empty(nq, np.float64)
+    qys = np.empty(nq, np.float64)
+    qc = np.empty(nq, np.float64)
+    qs = np.empty(nq, np.float64)
+    for j in range(nq):
+        qxs[j] = (qx[j] - tx0) * inv
+        qys[j] = (qy[j] - ty0) * inv
+        qc[j] = math.cos(qang[j])
+        qs[j] = math.sin(qang[j])
+    rr = np.empty(n_rho, np.float64)
+    for k in range(n_rho):
+        rr[k] = rhos[k] * inv
+    acc = np.zeros((n_rho, nh, nw), np.float32)
+    fnw = float(nw)
+    fnh = float(nh)
+    for d in range(n_phi):
+        phi_d = phis[d]
+        cphi = math.cos(phi_d)
+        sphi = math.sin(phi_d)
+        acc[:] = 0.0
+        for i in range(np_):
+            ai = pang[i]
+            pci = math.cos(ai)
+            psi = math.sin(ai)
+            pxi = px[i]
+            pyi = py[i]
+            wi = pw[i]
+            # image angle expected for this pattern point: a - phi
+            centre = ai - phi_d
+            b_lo = int(math.floor((centre - phi_half) / abin))
+            b_hi = int(math.floor((centre + phi_half) / abin))
+            for bb in range(b_lo, b_hi + 1):
+                b = bb % n_abins
+                for j in range(qstart[b], qstart[b + 1]):
+                    dphi = ai - qang[j] - phi_d
+                    while dphi >= math.pi:
+                        dphi -= TWO_PI
+                    while dphi < -math.pi:
+                        dphi += TWO_PI
+                    if dphi < -phi_half or dphi >= phi_half:
+                        continue
+                    if mode == MODE_SEGMENTS:
+                        aa = pxi - p2x[i]
+                        bq = pyi - p2y[i]
+                        cc = qx[j] - q2x[j]
+                        dd = qy[j] - q2y[j]
+                        nn = aa * aa + bq * bq
+                        if nn <= 0.0:
+                            continue
+                        rc = (aa * cc + bq * dd) / nn
+                        rs = (bq * cc - aa * dd) / nn
+                        rho = math.sqrt(rc * rc + rs * rs)
+                        if rho <= 0.0:
+                            continue
+                        k = int(math.floor((math.log(rho) - log_rho0) / log_step + 0.5))
+                        if k < 0 or k >= n_rho:
+                            continue
+                        fx = qxs[j] - (rc * pxi + rs * pyi) * inv
+                        fy = qys[j] - (-rs * pxi + rc * pyi) * inv
+                        if fx < 0.0 or fy < 0.0 or fx >= fnw or fy >= fnh:
+                            continue
+                        acc[k, int(fy), int(fx)] += wi
+                        continue
+                    if mode == MODE_ORIENTED:
+                        # rotation of the pair: cos/sin of (a_p - a_q)
+                        c = pci * qc[j] + psi * qs[j]
+                        s = psi * qc[j] - pci * qs[j]
+                    else:
+                        c = cphi
+                        s = sphi
+                    ux = c * pxi + s * pyi
+                    uy = -s * pxi + c * pyi
+                    fx0 = qxs[j]
+                    fy0 = qys[j]
+                    for k in range(n_rho):
+                        fx = fx0 - rr[k] * ux
+                        fy = fy0 - rr[k] * uy
+                        if fx < 0.0 or fy < 0.0 or fx >= fnw or fy >= fnh:
+                            continue
+                        acc[k, int(fy), int(fx)] += wi
+        # reduce the slice: 2x2 translation blocks
+        for k in range(n_rho):
+            top = 0.0
+            for yy in range(nh - 1):
+                for xx in range(nw - 1):
+                    v = acc[k, yy, xx] + acc[k, yy, xx + 1] + acc[k, yy + 1, xx] + acc[k, yy + 1, xx + 1]
+                    if v > best_val[yy, xx]:
+                        best_val[yy, xx] = v
+                        best_k[yy, xx] = k
+                        best_d[yy, xx] = d
+                    if v > top:
+                        top = v
+            if top > proj_sr[k, d]:
+                proj_sr[k, d] = top
+
+
+# --------------------------------------------------------------------------- matching
+@njit(cache=True)
+def match_points(px, py, pang, a, b, tx, ty, ex, ey, eang, index, radius, ang_tol, either):
+    """For each pattern point mapped by the pose, the nearest image edge point
+    with a compatible gradient direction within ``radius`` pixels.
+
+    The pose is ``x'' = tx + a x' + b y'``, ``y'' = ty - b x' + a y'`` (a =
+    rho cos phi, b = rho sin phi). ``index`` maps pixels to edge point ids
+    (-1: none). Returns the matched edge id per pattern point (-1: none) and
+    the distance.
+    """
+    n = px.shape[0]
+    h, w = index.shape
+    out = -np.ones(n, np.int64)
+    dist = np.full(n, np.inf)
+    phi = math.atan2(b, a)
+    r = int(math.ceil(radius))
+    r2 = radius * radius
+    for i in range(n):
+        x = tx + a * px[i] + b * py[i]
+        y = ty - b * px[i] + a * py[i]
+        cx = int(math.floor(x + 0.5))
+        cy = int(math.floor(y + 0.5))
+        if cx < -r or cy < -r or cx >= w + r or cy >= h + r:
+            continue
+        want = pang[i] - phi
+        bestd = r2 + 1e-9
+        best = -1
+        for yy in range(max(cy - r, 0), min(cy + r + 1, h)):
+            for xx in range(max(cx - r, 0), min(cx + r + 1, w)):
+                j = index[yy, xx]
+                if j < 0:
+                    continue
+                da = _wrap_pi(eang[j] - want)
+                if either:
+                    if da > 0.5 * math.pi:
+                        da -= math.pi
+                    elif da < -0.5 * math.pi:
+                        da += math.pi
+                if abs(da) > ang_tol:
+                    continue
+                ddx = ex[j] - x
+                ddy = ey[j] - y
+                d2 = ddx * ddx + ddy * ddy
+                if d2 < bestd:
+                    bestd = d2
+                    best = j
+        if best >= 0:
+            out[i] = best
+            dist[i] = math.sqrt(bestd)
+    return out, dist
+
+
+@njit(cache=True)
+def _solve_pose(px, py, ex, ey, enx, eny, w, m, a, b, fix, along):
+    """Weighted least squares for (a, b, tx, ty): point-to-edge distances
+    plus ``along`` times point-to-point ones (keeps straight edges
+    determined). ``fix``: keep (a, b) and fit the translation only."""
+    ata = np.zeros((4, 4))
+    atb = np.zeros(4)
+    row = np.empty(4)
+    for i in range(m):
+        wi = w[i]
+        nx = enx[i]
+        ny = eny[i]
+        for rep in range(3):
+            if rep == 0:
+                row[0] = nx * px[i] + ny * py[i]
+                row[1] = nx * py[i] - ny * px[i]
+                row[2] = nx
+                row[3] = ny
+                t = nx * ex[i] + ny * ey[i]
+                ww = wi
+            elif rep == 1:
+                row[0] = px[i]
+                row[1] = py[i]
+                row[2] = 1.0
+                row[3] = 0.0
+                t = ex[i]
+                ww = wi * along
+            else:
+                row[0] = py[i]
+                row[1] = -px[i]
+                row[2] = 0.0
+                row[3] = 1.0
+                t = ey[i]
+                ww = wi * along
+            if ww == 0.0:
+                continue
+            if fix:
+                t -= row[0] * a + row[1] * b
+            for r in range(4):
+                atb[r] += ww * row[r] * t
+                for c in range(4):
+                    ata[r, c] += ww * row[r] * row[c]
+    out = np.empty(4)
+    if fix:
+        det = ata[2, 2] * ata[3, 3] - ata[2, 3] * ata[3, 2]
+        if abs(det) < 1e-12:
+            out[0] = np.nan
+            return out
+        out[0] = a
+        out[1] = b
+        out[2] = (atb[2] * ata[3, 3] - ata[2, 3] * atb[3]) / det
+        out[3] = (ata[2, 2] * atb[3] - ata[3, 2] * atb[2]) / det
+        return out
+    for r in range(4):
+        ata[r, r] += 1e-9
+    if abs(np.linalg.det(ata)) < 1e-12:
+        out[0] = np.nan
+        return out
+    sol = np.linalg.solve(ata, atb)
+    for r in range(4):
+        out[r] = sol[r]
+    return out
+
+
+@njit(cache=True)
+def icp(px, py, pang, a, b, tx, ty, ex, ey, eang, index, radii, iterations, ang_tol,
+        either, fix_scale, fix_angle, along, score_radius, min_scale):
+    """Refine a similarity pose on matched edge points (iteratively re-weighted
+    least squares with shrinking match radii), then score it.
+
+    Returns ``(a, b, tx, ty, score, matched, rms, inside)``: the share of
+    pattern points with a compatible image edge within ``score_radius``, how
+    many, their rms distance, and the share of points inside the image.
+    """
+    n = px.shape[0]
+    h, w = index.shape
+    mpx = np.empty(n)
+    mpy = np.empty(n)
+    mex = np.empty(n)
+    mey = np.empty(n)
+    mnx = np.empty(n)
+    mny = np.empty(n)
+    mw = np.empty(n)
+    scale0 = math.sqrt(a * a + b * b)
+    ang0 = math.atan2(b, a)
+    for ri in range(radii.shape[0]):
+        r = radii[ri]
+        for _ in range(iterations):
+            ids, dist = match_points(px, py, pang, a, b, tx, ty, ex, ey, eang, index, r,
+                                     ang_tol, either)
+            m = 0
+            for i in range(n):
+                j = ids[i]
+                if j < 0:
+                    continue
+                mpx[m] = px[i]
+                mpy[m] = py[i]
+                mex[m] = ex[j]
+                mey[m] = ey[j]
+                mnx[m] = math.cos(eang[j])
+                mny[m] = math.sin(eang[j])
+                mw[m] = 1.0 / max(1.0, dist[i] / (0.5 * r))
+                m += 1
+            if m < 6:
+                break
+            fix = fix_scale and fix_angle
+            sol = _solve_pose(mpx, mpy, mex, mey, mnx, mny, mw, m, a, b, fix, along)
+            if np.isnan(sol[0]):
+                break
+            na, nb, ntx, nty = sol[0], sol[1], sol[2], sol[3]
+            if (fix_scale or fix_angle) and not fix:
+                s = scale0 if fix_scale else math.sqrt(na * na + nb * nb)
+                an = ang0 if fix_angle else math.atan2(nb, na)
+                na = s * math.cos(an)
+                nb = s * math.sin(an)
+                sol = _solve_pose(mpx, mpy, mex, mey, mnx, mny, mw, m, na, nb, True, along)
+                if np.isnan(sol[0]):
+                    break
+                ntx, nty = sol[2], sol[3]
+            if math.sqrt(na * na + nb * nb) < min_scale:
+                break
+            moved = abs(ntx - tx) + abs(nty - ty)
+            a, b, tx, ty = na, nb, ntx, nty
+            if moved < 0.01:
+                break
+    ids, dist = match_points(px, py, pang, a, b, tx, ty, ex, ey, eang, index, score_radius,
+                             ang_tol, either)
+    matched = 0
+    ss = 0.0
+    inside = 0
+    for i in range(n):
+        if ids[i] >= 0:
+            matched += 1
+            ss += dist[i] * dist[i]
+        x = tx + a * px[i] + b * py[i]
+        y = ty - b * px[i] + a * py[i]
+        if x >= 0 and y >= 0 and x <= w - 1 and y <= h - 1:
+            inside += 1
+    rms = math.sqrt(ss / matched) if matched > 0 else np.inf
+    score = matched / n if n > 0 else 0.0
+    ins = inside / n if n > 0 else 0.0
+    return a, b, tx, ty, score, matched, rms, ins

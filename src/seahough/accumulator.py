@@ -1,0 +1,182 @@
+"""Stage 4: voting into the 4-D accumulator over (dx, dy, scale, rotation).
+
+The accumulator is never held whole: each rotation slice (scale x dy x dx)
+is filled in cache and reduced at once into its two 2-D projections, the
+planes the paper shows (its Fig. 4): where (dx-dy) and what size and which
+way (scale-rotation).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _kernels as K
+from .config import Config
+from .errors import ParameterError
+from .pattern import PatternFeatures
+from .segments import Segments
+
+_MODES = {"oriented": K.MODE_ORIENTED, "points": K.MODE_POINTS, "segments": K.MODE_SEGMENTS}
+N_ANGLE_BINS = 64
+
+
+@dataclass
+class Bins:
+    """The accumulator's grid. Translations are in working pixels."""
+
+    scales: np.ndarray        # scale bin centres
+    angles: np.ndarray        # rotation slice centres, radians
+    angle_half: float         # half width of a rotation slice (or the tolerance)
+    log_scale0: float
+    log_step: float
+    tx0: float                # translation of the dx-dy grid's origin
+    ty0: float
+    step: float               # translation bin size
+    nx: int
+    ny: int
+    mode: int
+    scale_known: bool
+    angle_known: bool
+
+
+@dataclass
+class AccumulatorPlanes:
+    """The accumulator's 2-D projections, for peaks and pictures.
+
+    Attributes
+    ----------
+    xy : ndarray (ny, nx)
+        For each translation, the highest cell over scale and rotation (the
+        dx-dy plane: where). Heights are shares of the pattern's voting points.
+    xy_scale, xy_angle : ndarray (ny, nx)
+        The scale and rotation (degrees) of that highest cell.
+    scale_angle : ndarray (n_scales, n_angles)
+        For each scale and rotation, the highest cell over translation.
+    scales, angles : ndarray
+        Bin centres of ``scale_angle`` (angles in degrees).
+    x, y : ndarray
+        Full-resolution image coordinates of the ``xy`` columns and rows.
+    """
+
+    xy: np.ndarray
+    xy_scale: np.ndarray
+    xy_angle: np.ndarray
+    scale_angle: np.ndarray
+    scales: np.ndarray
+    angles: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        """(left, right, bottom, top) for ``matplotlib.pyplot.imshow``."""
+        dx = self.x[1] - self.x[0] if self.x.size > 1 else 1.0
+        dy = self.y[1] - self.y[0] if self.y.size > 1 else 1.0
+        return (self.x[0] - dx / 2, self.x[-1] + dx / 2, self.y[-1] + dy / 2, self.y[0] - dy / 2)
+
+
+def _range(name, r, lo=None):
+    try:
+        a, b = (float(r[0]), float(r[1]))
+    except (TypeError, ValueError, IndexError):
+        raise ParameterError(f"{name}={r!r}: expected a (low, high) pair") from None
+    if not (math.isfinite(a) and math.isfinite(b)) or b < a:
+        raise ParameterError(f"{name}={r!r}: expected finite low <= high")
+    if lo is not None and a <= lo:
+        raise ParameterError(f"{name}={r!r}: values must be > {lo}")
+    return a, b
+
+
+def check_ranges(scale_range, angle_range):
+    """Validated ``(scale_range, angle_range)``; raises ParameterError."""
+    s = _range("scale_range", scale_range, lo=0.0)
+    a = _range("angle_range", angle_range)
+    if s[1] / s[0] > 64:
+        raise ParameterError(f"scale_range={scale_range!r}: spans more than 64x; split the search")
+    return s, a
+
+
+def make_bins(pf: PatternFeatures, scale_range, angle_range, region, config: Config) -> Bins:
+    """Bin sizes from the pattern's size, the ranges and the config.
+
+    ``region`` is (x0, y0, x1, y1) in working pixels: where the pattern
+    origin may lie.
+    """
+    (s0, s1), (a0, a1) = check_ranges(scale_range, angle_range)
+    r = max(pf.radius, 2.0)
+    s_mid = math.sqrt(s0 * s1)
+    scale_known = s1 / s0 < 1.0 + 1e-9
+    angle_known = (a1 - a0) < 1e-9
+    if config.translation_bin:
+        step = float(config.translation_bin)
+    elif scale_known and angle_known:
+        step = 1.0
+    else:
+        step = float(np.clip(0.17 * r * s_mid, 2.0, 6.0))
+    # rotation and scale steps that move the pattern's points about one bin
+    kappa = 1.6 * step / (r * s_mid)
+    if angle_known:
+        angles = np.array([math.radians(a0)])
+        half = math.radians(config.angle_tolerance)
+    else:
+        ab = math.radians(config.angle_bin) if config.angle_bin else float(np.clip(kappa, math.radians(2.5), math.radians(10.0)))
+        span = math.radians(min(a1 - a0, 360.0))
+        n = max(1, int(math.ceil(span / ab - 1e-9)))
+        w = span / n
+        angles = math.radians(a0) + (np.arange(n) + 0.5) * w
+        half = 0.5 * w
+    if scale_known:
+        scales = np.array([s0])
+        log0, lstep = math.log(s0), 1.0
+    else:
+        ls = config.scale_step or float(np.clip(kappa, 0.03, 0.15))
+        span = math.log(s1 / s0)
+        n = max(1, int(math.ceil(span / ls - 1e-9)))
+        lstep = span / n
+        log0 = math.log(s0) + 0.5 * lstep
+        scales = np.exp(log0 + np.arange(n) * lstep)
+    x0, y0, x1, y1 = region
+    nx = max(int(math.ceil((x1 - x0) / step)) + 1, 2)
+    ny = max(int(math.ceil((y1 - y0) / step)) + 1, 2)
+    mode = _MODES[config.voting]
+    if angle_known:
+        mode = K.MODE_POINTS  # a known rotation is used as given
+    return Bins(scales, angles, half, log0, lstep, float(x0), float(y0), step, nx, ny, mode,
+                scale_known, angle_known)
+
+
+def accumulate(pf: PatternFeatures, seg: Segments, bins: Bins, either: bool = False):
+    """Vote every pattern point / image segment pair; returns the raw reduced
+    arrays ``(best_val, best_k, best_d, proj_sr)``.
+
+    Examples
+    --------
+    See :func:`seahough.Detector.search`, which calls this.
+    """
+    px, py, pa, pw, p2x, p2y = pf.x, pf.y, pf.angle, pf.weight, pf.x2, pf.y2
+    if either:  # each pattern point may appear with its gradient reversed
+        px, py, p2x, p2y = (np.concatenate([v, v]) for v in (px, py, p2x, p2y))
+        pa = np.concatenate([pa, (pa + np.float32(math.pi)) % np.float32(2 * math.pi)])
+        pw = np.concatenate([pw, pw])
+    abin = 2 * math.pi / N_ANGLE_BINS
+    b = np.minimum((seg.angle / abin).astype(np.int64), N_ANGLE_BINS - 1)
+    order = np.argsort(b, kind="stable")
+    qstart = np.zeros(N_ANGLE_BINS + 1, np.int64)
+    np.cumsum(np.bincount(b, minlength=N_ANGLE_BINS), out=qstart[1:])
+    c = lambda a: np.ascontiguousarray(a[order], np.float32)
+    nxr, nyr = bins.nx, bins.ny
+    best_val = np.zeros((nyr - 1, nxr - 1), np.float32)
+    best_k = np.zeros((nyr - 1, nxr - 1), np.int32)
+    best_d = np.zeros((nyr - 1, nxr - 1), np.int32)
+    proj = np.zeros((bins.scales.size, bins.angles.size), np.float32)
+    f = lambda a: np.ascontiguousarray(a, np.float32)
+    K.vote(f(px), f(py), f(pa), f(pw), f(p2x), f(p2y),
+           c(seg.x), c(seg.y), c(seg.angle), c(seg.x2), c(seg.y2), qstart, N_ANGLE_BINS,
+           bins.angles.astype(np.float64), float(bins.angle_half), bins.scales.astype(np.float64),
+           float(bins.log_scale0), float(bins.log_step), int(bins.mode),
+           float(bins.tx0), float(bins.ty0), float(bins.step), int(nxr), int(nyr),
+           best_val, best_k, best_d, proj)
+    return best_val, best_k, best_d, proj

@@ -1,0 +1,133 @@
+"""All tuning parameters of the pipeline, on one documented object."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from .errors import ParameterError
+
+VOTING_MODES = ("oriented", "points", "segments")
+
+
+@dataclass(frozen=True)
+class Config:
+    """Parameters of every stage, with defaults that suit 640x480 photos.
+
+    Parameters
+    ----------
+    downscale : float or None
+        Factor applied to the frame before anything else (0 < f <= 1).
+        ``None`` picks it from ``target_size``, raised when needed so that the
+        pattern at the smallest searched scale keeps ``min_pattern_size`` px.
+    target_size : int
+        Longest side of the working image when ``downscale`` is None.
+    n_keypoints : int
+        N, the number of most contrasted edge points kept in the image
+        (the paper uses 1000-2000).
+    n_pattern_points : int
+        Key points kept on the pattern for voting (the paper: about 100).
+    n_verify_points : int
+        Pattern edge points used to score and refine a candidate pose.
+    min_pattern_size : float
+        Smallest pattern extent, in working pixels, at the smallest scale.
+    min_gradient : float
+        Gradient magnitude (Scharr units; a step of 1 grey level gives 16)
+        below which a pixel is never an edge point.
+    equalize : bool
+        Apply CLAHE (local contrast equalisation) before the gradients; helps
+        with uneven strobe light and haze.
+    segment_steps : int
+        How many pixels a segment is traced along the edge on each side of
+        its key point.
+    segment_angle_tol : float
+        Largest change of gradient direction (degrees) between neighbouring
+        points of one segment.
+    max_segments : int
+        At most this many image segments vote.
+    voting : str
+        ``"oriented"`` (default): each pattern point / image segment pair
+        takes its rotation from the difference of their edge directions and
+        votes over a small cycle of scales. ``"points"``: the paper's point
+        voting with cycles over scale and rotation, pairs pruned by gradient
+        direction. ``"segments"``: segment pairs solved directly with
+        equation 5. See ``docs/method.md`` for the measurements.
+    translation_bin, angle_bin, scale_step : float or None
+        Accumulator bin sizes (working px, degrees, log-scale step). ``None``
+        derives them from the pattern's size.
+    angle_tolerance : float
+        Largest difference (degrees) between an image edge direction and the
+        rotated pattern edge direction for a pair to vote when the rotation is
+        known, and for a pattern point to count as found.
+    match_radius : float
+        A pattern edge point counts as found when an image edge point lies
+        within this distance (full-resolution px) after refinement.
+    n_candidates : int
+        Accumulator peaks examined (scored and refined) per search.
+    refine : bool
+        Refine poses below one accumulator bin by least squares on the matched
+        edge points (point-to-edge distances), finishing at full resolution.
+    max_pixels : int
+        Images with more pixels are refused (decompression-bomb guard).
+    """
+
+    downscale: float | None = None
+    target_size: int = 320
+    n_keypoints: int = 1500
+    n_pattern_points: int = 128
+    n_verify_points: int = 400
+    min_pattern_size: float = 24.0
+    min_gradient: float = 48.0
+    equalize: bool = False
+    segment_steps: int = 2
+    segment_angle_tol: float = 30.0
+    max_segments: int = 10000
+    voting: str = "oriented"
+    translation_bin: float | None = None
+    angle_bin: float | None = None
+    scale_step: float | None = None
+    angle_tolerance: float = 20.0
+    match_radius: float = 2.0
+    n_candidates: int = 8
+    refine: bool = True
+    max_pixels: int = 200_000_000
+
+    def __post_init__(self) -> None:
+        def bad(name, why):
+            raise ParameterError(f"Config.{name}={getattr(self, name)!r}: {why}")
+
+        if self.downscale is not None and not (0 < self.downscale <= 1):
+            bad("downscale", "must be in (0, 1] or None")
+        for name in ("target_size", "n_keypoints", "n_pattern_points", "n_verify_points",
+                     "max_segments", "n_candidates", "max_pixels"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+                bad(name, "must be a positive integer")
+        if self.target_size < 32:
+            bad("target_size", "must be at least 32")
+        if self.n_pattern_points < 8:
+            bad("n_pattern_points", "must be at least 8")
+        if not (1 <= self.segment_steps <= 20):
+            bad("segment_steps", "must be between 1 and 20")
+        for name in ("min_pattern_size", "match_radius"):
+            if not (getattr(self, name) > 0):
+                bad(name, "must be > 0")
+        if not (self.min_gradient >= 0):
+            bad("min_gradient", "must be >= 0")
+        for name in ("segment_angle_tol", "angle_tolerance"):
+            if not (0 < getattr(self, name) <= 90):
+                bad(name, "must be in (0, 90] degrees")
+        if self.voting not in VOTING_MODES:
+            bad("voting", f"must be one of {', '.join(VOTING_MODES)}")
+        for name in ("translation_bin", "angle_bin", "scale_step"):
+            v = getattr(self, name)
+            if v is not None and not (v > 0):
+                bad(name, "must be > 0 or None")
+
+    def replace(self, **changes) -> "Config":
+        """A copy with some fields changed (validated again)."""
+        names = {f.name for f in dataclasses.fields(self)}
+        for k in changes:
+            if k not in names:
+                raise ParameterError(f"Config has no parameter {k!r}")
+        return dataclasses.replace(self, **changes)

@@ -1,0 +1,424 @@
+"""Stages 5-7: peaks of the accumulator, refined poses, detections."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from .accumulator import AccumulatorPlanes, Bins, accumulate, check_ranges, make_bins
+from .config import Config
+from .errors import ParameterError
+from .features import Features, extract_features
+from .geometry import apply_matrix, pose_to_matrix
+from .imageio import to_gray
+from .keypoints import find_edge_points
+from .pattern import Pattern
+from .preprocess import choose_factor, compute_gradients
+from .refine import Fit, Pose, refine
+
+#: Flag on line detections: the position along the line is not measured.
+FLAG_ALONG_LINE = "position_along_line_undetermined"
+#: Flag when the detection lies partly outside the image.
+FLAG_PARTIAL = "partly_outside_image"
+#: Flag when a close runner-up makes the detection doubtful.
+FLAG_AMBIGUOUS = "ambiguous"
+
+
+@dataclass
+class Detection:
+    """One instance of the pattern found in an image.
+
+    Attributes
+    ----------
+    x, y : float
+        Where the pattern origin lies, in full-resolution image pixels.
+    scale : float
+        Size in the image relative to the pattern (equation 1's rho).
+    angle : float
+        Rotation in degrees [0, 360), counter-clockwise as displayed (phi).
+    score : float
+        Share of the pattern's edge points found in the image at this pose
+        (0-1), after refinement.
+    confidence : float
+        How distinct this peak is: ``1 - runner_up / score``, where the
+        runner-up is the best-scoring other candidate that is not one of the
+        returned detections (0: no better than the clutter, 1: unique).
+    matrix : ndarray (2, 3)
+        Pattern-image pixel (x, y) -> image pixel (x, y); the matrix
+        ``cv2.warpAffine(pattern.image, matrix, (w, h))`` takes.
+    outline : list of ndarray
+        The pattern's outline polylines in image pixels.
+    votes : float
+        Height of the accumulator peak (share of the voting points).
+    kind : str
+        ``"object"``, or ``"line"`` for line patterns.
+    line_angle, line_offset : float or None
+        For lines: direction in degrees [0, 180) (counter-clockwise from +x as
+        displayed) and the signed distance in pixels from the image centre
+        ``((w-1)/2, (h-1)/2)`` to the line, positive when the line lies on
+        the side of the normal ``(sin a, cos a)`` (i.e. below the centre for a
+        horizontal line). ``x, y`` is then the point of the line nearest the
+        image centre.
+    flags : tuple of str
+        Warnings about this result (see the ``FLAG_*`` constants).
+    """
+
+    x: float
+    y: float
+    scale: float
+    angle: float
+    score: float
+    confidence: float
+    matrix: np.ndarray
+    outline: list = field(default_factory=list)
+    votes: float = 0.0
+    kind: str = "object"
+    line_angle: float | None = None
+    line_offset: float | None = None
+    flags: tuple = ()
+
+    def to_dict(self) -> dict:
+        """Plain-Python form for JSON."""
+        d = {"x": self.x, "y": self.y, "scale": self.scale, "angle": self.angle,
+             "score": self.score, "confidence": self.confidence,
+             "matrix": np.asarray(self.matrix).tolist(), "votes": self.votes,
+             "kind": self.kind, "flags": list(self.flags)}
+        if self.kind == "line":
+            d["line_angle"] = self.line_angle
+            d["line_offset"] = self.line_offset
+        return d
+
+
+@dataclass
+class SearchResult:
+    """Everything one search produced: the detections and how it got there."""
+
+    detections: list
+    planes: AccumulatorPlanes | None
+    features: Features | None
+    factor: float
+    candidates: list
+    timings: dict
+    note: str = ""
+
+
+@dataclass
+class _Candidate:
+    fit: Fit
+    votes: float
+    work_score: float
+    full: Fit | None = None
+
+
+def line_parameters(x: float, y: float, angle_deg: float, shape) -> tuple[float, float, float, float]:
+    """(line_angle, line_offset, foot_x, foot_y) of the line through (x, y) at
+    ``angle_deg``, relative to the centre of an image of ``shape``."""
+    h, w = shape[:2]
+    cx, cy = (w - 1) / 2.0, (h - 1) / 2.0
+    a = angle_deg % 180.0
+    t = math.radians(a)
+    d = np.array([math.cos(t), -math.sin(t)])   # along the line, as displayed
+    n = np.array([math.sin(t), math.cos(t)])    # normal
+    off = float(n @ (np.array([x, y]) - [cx, cy]))
+    fx, fy = cx + off * n[0], cy + off * n[1]
+    return a, off, float(fx), float(fy)
+
+
+class Detector:
+    """Find a pattern at unknown position, scale and rotation.
+
+    Create it once per pattern and search range, then call :meth:`detect`
+    on as many images as needed.
+
+    Parameters
+    ----------
+    pattern : Pattern
+        What to look for.
+    scale_range : (float, float)
+        Smallest and largest size relative to the pattern. Equal values mean
+        a known scale.
+    angle_range : (float, float)
+        Rotations to search, degrees (counter-clockwise as displayed). Equal
+        values mean a known rotation; the default is any rotation.
+    config : Config, optional
+        Tuning of every stage.
+    max_results : int
+        At most this many detections.
+    min_score : float
+        A detection must have at least this share of the pattern's edges.
+    min_confidence : float
+        ... and at least this confidence.
+    search_region : (x0, y0, x1, y1), optional
+        Where the pattern origin may lie, in full-resolution image pixels.
+        Default: the image, plus a margin of a tenth of the pattern's size.
+
+    Examples
+    --------
+    >>> import numpy as np, cv2
+    >>> img = np.full((240, 320), 40, np.uint8)
+    >>> box = cv2.boxPoints(((200.0, 110.0), (90.0, 50.0), -30.0))
+    >>> _ = cv2.fillPoly(img, [np.round(box).astype(np.int32)], 220)
+    >>> found = Detector(Pattern.rectangle(60, 100)).detect(img)
+    >>> d = found[0]
+    >>> round(d.x), round(d.y), round(d.scale, 1)
+    (200, 110, 0.9)
+    """
+
+    def __init__(self, pattern: Pattern, scale_range=(0.5, 2.0), angle_range=(0.0, 360.0), *,
+                 config: Config | None = None, max_results: int = 5, min_score: float = 0.35,
+                 min_confidence: float = 0.0, search_region=None):
+        if not isinstance(pattern, Pattern):
+            raise ParameterError(f"pattern must be a seahough.Pattern, got {type(pattern).__name__}")
+        self.pattern = pattern
+        (self.scale_range, self.angle_range) = check_ranges(scale_range, angle_range)
+        self.config = config or Config()
+        if not isinstance(self.config, Config):
+            raise ParameterError("config must be a seahough.Config")
+        if isinstance(max_results, bool) or not isinstance(max_results, (int, np.integer)) or max_results < 1:
+            raise ParameterError(f"max_results={max_results!r}: must be a positive integer")
+        for name, v in (("min_score", min_score), ("min_confidence", min_confidence)):
+            if not (isinstance(v, (int, float)) and 0.0 <= v <= 1.0):
+                raise ParameterError(f"{name}={v!r}: must be between 0 and 1")
+        self.max_results = int(max_results)
+        self.min_score = float(min_score)
+        self.min_confidence = float(min_confidence)
+        if search_region is not None:
+            try:
+                sr = tuple(float(v) for v in search_region)
+            except (TypeError, ValueError):
+                sr = ()
+            if len(sr) != 4 or not all(map(math.isfinite, sr)) or sr[2] <= sr[0] or sr[3] <= sr[1]:
+                raise ParameterError(f"search_region={search_region!r}: expected (x0, y0, x1, y1) "
+                                     "with x1 > x0 and y1 > y0")
+            search_region = sr
+        self.search_region = search_region
+
+    # ------------------------------------------------------------------ public
+    def detect(self, image) -> list:
+        """Detections of the pattern in ``image`` (path or array), best first.
+
+        An empty list means the pattern was not found.
+        """
+        return self.search(image).detections
+
+    def search(self, image, features: Features | None = None) -> SearchResult:
+        """Like :meth:`detect`, also returning the accumulator planes, all
+        scored candidates and the stage timings.
+
+        ``features`` may pass the image's already computed features (from a
+        previous search at the same working scale), e.g. in dead reckoning.
+        """
+        cfg = self.config
+        t0 = time.perf_counter()
+        timings = {}
+        gray = to_gray(image, max_pixels=cfg.max_pixels)
+        p = self.pattern
+        s0, s1 = self.scale_range
+        factor = features.gradients.factor if features is not None else choose_factor(
+            gray.shape, cfg, p.extent, s0)
+        if features is None:
+            features = extract_features(gray, factor, cfg)
+        t1 = time.perf_counter()
+        timings["features"] = t1 - t0
+        if len(features.segments) < 4:
+            return SearchResult([], None, features, factor, [], timings, note="no edges")
+        pf = p.features(factor, cfg)
+        g = features.gradients
+        h, w = features.shape
+        if self.search_region is not None:
+            x0, y0 = g.to_work(self.search_region[0], self.search_region[1])
+            x1, y1 = g.to_work(self.search_region[2], self.search_region[3])
+        else:
+            m = 0.1 * p.extent * s1 * factor
+            x0, y0, x1, y1 = -m, -m, w - 1 + m, h - 1 + m
+        region = (float(x0), float(y0), float(x1), float(y1))
+        bins = make_bins(pf, self.scale_range, self.angle_range, region, cfg)
+        best_val, best_k, best_d, proj = accumulate(pf, features.segments, bins, p.either)
+        t2 = time.perf_counter()
+        timings["voting"] = t2 - t1
+        planes = self._planes(bins, best_val, best_k, best_d, proj, g)
+        self._probe = np.stack([pf.vx, pf.vy], 1).astype(float)
+        self._close_px = max(2.0 * bins.step, 3.0)
+        cands = self._candidates(pf, features, bins, best_val, best_k, best_d, factor)
+        t3 = time.perf_counter()
+        timings["peaks_refine"] = t3 - t2
+        dets = self._finish(cands, gray, features, factor)
+        timings["full_resolution"] = time.perf_counter() - t3
+        timings["total"] = time.perf_counter() - t0
+        return SearchResult(dets, planes, features, factor, cands, timings)
+
+    # ----------------------------------------------------------------- helpers
+    def _planes(self, bins: Bins, best_val, best_k, best_d, proj, g) -> AccumulatorPlanes:
+        cols = bins.tx0 + (np.arange(best_val.shape[1]) + 1) * bins.step
+        rows = bins.ty0 + (np.arange(best_val.shape[0]) + 1) * bins.step
+        xs, ys = g.to_full(cols, rows)
+        return AccumulatorPlanes(best_val, bins.scales[best_k].astype(np.float32),
+                                 np.degrees(bins.angles[best_d]).astype(np.float32) % 360.0,
+                                 proj, bins.scales.copy(), np.degrees(bins.angles) % 360.0,
+                                 np.asarray(xs, float), np.asarray(ys, float))
+
+    def _peaks(self, best_val, radius: int, n: int):
+        """Local maxima of the dx-dy plane, highest first."""
+        k = 2 * radius + 1
+        dil = cv2.dilate(best_val, np.ones((k, k), np.uint8))
+        ys, xs = np.nonzero((best_val >= dil) & (best_val > 0))
+        v = best_val[ys, xs]
+        order = np.argsort(-v, kind="stable")[: 4 * n]
+        return ys[order], xs[order], v[order]
+
+    def _candidates(self, pf, features: Features, bins: Bins, best_val, best_k, best_d, factor):
+        cfg = self.config
+        p = self.pattern
+        s0 = self.scale_range[0]
+        if p.is_line:
+            radius = max(1, int(round(0.5 * p.line_width * s0 * factor / bins.step)))
+        else:
+            radius = int(np.clip(round(0.25 * p.extent * s0 * factor / bins.step), 1, 4))
+        ys, xs, vs = self._peaks(best_val, radius, cfg.n_candidates)
+        tol = math.radians(cfg.angle_tolerance)
+        r0 = max(1.5 * bins.step, 2.0)
+        radii = (r0, max(0.75 * r0, 1.5), 1.25)
+        out = []
+        for yy, xx, v in zip(ys, xs, vs):
+            if len(out) >= cfg.n_candidates:
+                break
+            tx = bins.tx0 + (xx + 1) * bins.step
+            ty = bins.ty0 + (yy + 1) * bins.step
+            pose = Pose.from_params(tx, ty, float(bins.scales[best_k[yy, xx]]),
+                                    float(bins.angles[best_d[yy, xx]]))
+            if cfg.refine:
+                fit = refine(pose, pf.vx, pf.vy, pf.vangle, features.edges, features.index,
+                             radii=radii, angle_tol=tol, either=p.either,
+                             fix_scale=bins.scale_known, fix_angle=bins.angle_known,
+                             score_radius=max(1.25, cfg.match_radius * factor))
+            else:
+                fit = refine(pose, pf.vx, pf.vy, pf.vangle, features.edges, features.index,
+                             radii=(), angle_tol=tol, either=p.either,
+                             score_radius=max(1.25, cfg.match_radius * factor))
+            if not self._pose_ok(fit.pose):
+                continue
+            if any(self._same(fit.pose, c.fit.pose, factor) for c in out):
+                continue
+            out.append(_Candidate(fit, float(v), fit.score))
+        out.sort(key=lambda c: -c.work_score)
+        # after refinement two peaks may have converged on one object
+        uniq = []
+        for c in out:
+            if not any(self._same(c.fit.pose, u.fit.pose, factor) for u in uniq):
+                uniq.append(c)
+        return uniq
+
+    def _pose_ok(self, pose: Pose) -> bool:
+        s0, s1 = self.scale_range
+        return 0.8 * s0 <= pose.scale <= 1.25 * s1 and math.isfinite(pose.tx) and math.isfinite(pose.ty)
+
+    def _same(self, a: Pose, b: Pose, factor: float) -> bool:
+        """Do two poses describe the same object (or the same line)?"""
+        p = self.pattern
+        if p.is_line:
+            ta, tb = math.radians(a.angle), math.radians(b.angle)
+            if abs(((math.degrees(ta - tb) + 90) % 180) - 90) > 10:
+                return False
+            n = np.array([math.sin(ta), math.cos(ta)])
+            d = abs(n @ np.array([a.tx - b.tx, a.ty - b.ty]))
+            return d < max(p.line_width * factor * max(a.scale, b.scale), 2.0)
+        r = 0.35 * p.extent * factor * min(a.scale, b.scale)
+        return math.hypot(a.tx - b.tx, a.ty - b.ty) < r
+
+    def _close(self, a: Pose, b: Pose) -> bool:
+        """Practically the same pose: the pattern's points move less than
+        ~2 working pixels between the two."""
+        pts = self._probe
+        ax, ay = a.map(pts[:, 0], pts[:, 1])
+        bx, by = b.map(pts[:, 0], pts[:, 1])
+        return float(np.max(np.hypot(ax - bx, ay - by))) < self._close_px
+
+    def _full_res(self, fit: Fit, gray, features: Features, factor: float) -> Fit:
+        """Refine a working-resolution fit on the full-resolution image."""
+        cfg = self.config
+        p = self.pattern
+        g = features.gradients
+        tx, ty = g.to_full(fit.pose.tx, fit.pose.ty)
+        pose = Pose(fit.pose.a, fit.pose.b, float(tx), float(ty))
+        pf1 = p.features(1.0, cfg)
+        if factor < 0.999:
+            mx, my = pose.map(pf1.vx, pf1.vy)
+            H, W = gray.shape
+            x0 = int(max(0, math.floor(mx.min()) - 8)); x1 = int(min(W, math.ceil(mx.max()) + 9))
+            y0 = int(max(0, math.floor(my.min()) - 8)); y1 = int(min(H, math.ceil(my.max()) + 9))
+            if x1 - x0 < 8 or y1 - y0 < 8:
+                return fit
+            grad = compute_gradients(np.ascontiguousarray(gray[y0:y1, x0:x1]), 1.0, cfg.equalize)
+            edges = find_edge_points(grad, cfg.min_gradient)
+            index = edges.index_map()
+            local = Pose(pose.a, pose.b, pose.tx - x0, pose.ty - y0)
+            r = 1.0 / factor
+            f = refine(local, pf1.vx, pf1.vy, pf1.vangle, edges, index,
+                       radii=(1.5 * r, max(r, 2.0), 1.5) if cfg.refine else (),
+                       angle_tol=math.radians(cfg.angle_tolerance), either=p.either,
+                       fix_scale=self.scale_range[0] == self.scale_range[1],
+                       fix_angle=self.angle_range[0] == self.angle_range[1],
+                       score_radius=cfg.match_radius)
+            q = f.pose
+            # the share inside the image is measured on the whole image, not the crop
+            mx, my = Pose(q.a, q.b, q.tx + x0, q.ty + y0).map(pf1.vx, pf1.vy)
+            inside = float(np.mean((mx >= 0) & (my >= 0) & (mx <= W - 1) & (my <= H - 1)))
+            return Fit(Pose(q.a, q.b, q.tx + x0, q.ty + y0), f.score, f.matched, f.rms, inside)
+        return refine(pose, pf1.vx, pf1.vy, pf1.vangle, features.edges, features.index,
+                      radii=(1.0,) if cfg.refine else (), angle_tol=math.radians(cfg.angle_tolerance),
+                      either=p.either, fix_scale=self.scale_range[0] == self.scale_range[1],
+                      fix_angle=self.angle_range[0] == self.angle_range[1],
+                      score_radius=cfg.match_radius)
+
+    def _finish(self, cands, gray, features: Features, factor: float) -> list:
+        p = self.pattern
+        accepted: list[_Candidate] = []
+        pre = 0.75 * self.min_score
+        for c in cands:
+            if len(accepted) >= self.max_results:
+                break
+            if c.work_score < pre:
+                continue
+            c.full = self._full_res(c.fit, gray, features, factor)
+            if c.full.score < self.min_score or not self._pose_ok(c.full.pose):
+                continue
+            if any(self._same(c.full.pose, a.full.pose, 1.0) for a in accepted):
+                continue
+            accepted.append(c)
+        # runner-up: the best candidate that is not (nearly) the same pose as a detection
+        others = [c.work_score for c in cands
+                  if not any(c is a or self._close(c.fit.pose, a.fit.pose) for a in accepted)]
+        runner_up = max(others, default=0.0)
+        dets = []
+        for c in accepted:
+            conf = float(np.clip(1.0 - runner_up / max(c.work_score, 1e-9), 0.0, 1.0))
+            if conf < self.min_confidence:
+                continue
+            dets.append(self._detection(c, conf, gray.shape))
+        dets.sort(key=lambda d: -d.score)
+        return dets
+
+    def _detection(self, c: _Candidate, confidence: float, shape) -> Detection:
+        p = self.pattern
+        pose = c.full.pose
+        x, y, s, a = pose.tx, pose.ty, pose.scale, pose.angle
+        kind, la, lo = "object", None, None
+        if p.is_line:
+            # any point of the line is as good: report the one nearest the centre
+            kind = "line"
+            la, lo, x, y = line_parameters(x, y, a, shape)
+        m = pose_to_matrix(x, y, s, a, p.origin)
+        outline = [apply_matrix(m, o) for o in p.outline]
+        flags = []
+        if c.full.inside < 0.98:
+            flags.append(FLAG_PARTIAL)
+        if confidence < 0.2:
+            flags.append(FLAG_AMBIGUOUS)
+        if p.is_line:
+            flags.append(FLAG_ALONG_LINE)
+        return Detection(float(x), float(y), float(s), float(a), float(c.full.score), confidence,
+                         m, outline, c.votes, kind, la, lo, tuple(flags))

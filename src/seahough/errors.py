@@ -1,0 +1,58 @@
+"""The exceptions seahough raises.
+
+Every error a user can cause is one of these, so a script can catch
+:class:`SeahoughError` and know it was given bad input rather than hit a bug.
+The classes also derive from the matching built-in (``ValueError``,
+``OSError``) so that generic handlers keep working.
+
+Hierarchy::
+
+    SeahoughError
+    ├── ImageError                (ValueError)  the image is unusable
+    │   ├── ImageReadError        (OSError)     missing, unreadable or corrupt file
+    │   ├── ImageSizeError                      empty, too small, or too large
+    │   └── ImageValueError                     wrong shape/dtype, NaN or inf
+    ├── PatternError              (ValueError)  the pattern cannot be searched for
+    └── ParameterError            (ValueError)  a parameter is out of range
+"""
+
+from __future__ import annotations
+
+
+class SeahoughError(Exception):
+    """Base class of every error seahough raises on bad input."""
+
+
+class ImageError(SeahoughError, ValueError):
+    """The image cannot be used (see the subclasses)."""
+
+
+class ImageReadError(ImageError, OSError):
+    """The file is missing, unreadable, not an image, or corrupt."""
+
+
+class ImageSizeError(ImageError):
+    """The image is empty, too small to hold edges, or larger than the pixel limit."""
+
+
+class ImageValueError(ImageError):
+    """The array has an unsupported shape or dtype, or holds NaN/inf."""
+
+
+class PatternError(SeahoughError, ValueError):
+    """The pattern cannot be searched for (no edges, degenerate shape...)."""
+
+
+class ParameterError(SeahoughError, ValueError):
+    """A parameter is out of range or contradicts another one."""
+
+
+__all__ = [
+    "SeahoughError",
+    "ImageError",
+    "ImageReadError",
+    "ImageSizeError",
+    "ImageValueError",
+    "PatternError",
+    "ParameterError",
+]

@@ -1,0 +1,47 @@
+"""Image -> gradients -> edge points -> key points -> segments, in one call."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .config import Config
+from .keypoints import EdgePoints, find_edge_points, select_keypoints
+from .preprocess import Gradients, compute_gradients
+from .segments import Segments, trace_segments
+
+
+@dataclass
+class Features:
+    """Everything the later stages need from one image at one working scale."""
+
+    gradients: Gradients
+    edges: EdgePoints
+    index: np.ndarray
+    keypoints: np.ndarray
+    segments: Segments
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.gradients.magnitude.shape
+
+
+def extract_features(gray: np.ndarray, factor: float, config: Config,
+                     n_keypoints: int | None = None, mask: np.ndarray | None = None) -> Features:
+    """Run the preprocessing stages on a float32 grey image.
+
+    ``mask`` (working resolution, bool) limits the edge points, e.g. to a
+    pattern's own pixels.
+    """
+    grad = compute_gradients(gray, factor, config.equalize)
+    edges = find_edge_points(grad, config.min_gradient)
+    if mask is not None and len(edges):
+        keep = mask[edges.iy, edges.ix]
+        edges = EdgePoints(*(a[keep] for a in (edges.x, edges.y, edges.angle, edges.magnitude,
+                                                edges.ix, edges.iy)), edges.shape)
+    index = edges.index_map()
+    kp = select_keypoints(edges, n_keypoints or config.n_keypoints)
+    seg = trace_segments(edges, kp, config.segment_steps, config.segment_angle_tol,
+                         config.max_segments, index)
+    return Features(grad, edges, index, kp, seg)

@@ -1,0 +1,125 @@
+"""Image input: a path or an array in, a finite float32 grey image out."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from .errors import ImageReadError, ImageSizeError, ImageValueError
+
+#: The smallest side, in pixels, an image must have to hold any edge.
+MIN_SIDE = 8
+
+
+def _check_header(path: Path, max_pixels: int) -> None:
+    """Refuse a file whose header claims more than ``max_pixels`` pixels."""
+    try:
+        from PIL import Image
+    except ImportError:  # pragma: no cover - pillow comes with matplotlib
+        return
+    Image.MAX_IMAGE_PIXELS = None  # we apply our own limit below
+    try:
+        with Image.open(path) as im:
+            w, h = im.size
+    except Exception:
+        return  # not a format Pillow knows; OpenCV decides below
+    if w * h > max_pixels:
+        raise ImageSizeError(
+            f"{path}: header claims {w}x{h} = {w * h} pixels, over the limit of "
+            f"{max_pixels} (Config.max_pixels); refusing to decode")
+
+
+def _check_complete(path: Path, data: bytes) -> None:
+    """Refuse truncated JPEG and PNG files (decoders would fill in grey)."""
+    tail = data.rstrip(b"\x00")[-16:]
+    if data[:3] == b"\xff\xd8\xff" and not tail.endswith(b"\xff\xd9"):
+        raise ImageReadError(f"{path}: truncated JPEG (no end-of-image marker)")
+    if data[:8] == b"\x89PNG\r\n\x1a\n" and b"IEND" not in tail:
+        raise ImageReadError(f"{path}: truncated PNG (no IEND chunk)")
+
+
+def read_image(path: str | os.PathLike, *, max_pixels: int = 200_000_000) -> np.ndarray:
+    """Read an image file as OpenCV does (any depth, grey/BGR/BGRA).
+
+    Raises
+    ------
+    ImageReadError
+        Missing, unreadable, truncated or not an image.
+    ImageSizeError
+        Empty, or larger than ``max_pixels``.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise ImageReadError(f"{p}: no such file")
+    if p.is_dir():
+        raise ImageReadError(f"{p}: is a folder, not an image")
+    try:
+        data = p.read_bytes()
+    except OSError as e:
+        raise ImageReadError(f"{p}: cannot read ({e.strerror or e})") from None
+    if not data:
+        raise ImageReadError(f"{p}: empty file")
+    _check_header(p, max_pixels)
+    _check_complete(p, data)
+    img = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+    if img is None:
+        raise ImageReadError(f"{p}: not an image OpenCV can decode")
+    if img.size == 0:
+        raise ImageSizeError(f"{p}: image has no pixels")
+    return img
+
+
+def to_gray(image, *, name: str = "image", max_pixels: int = 200_000_000,
+            min_side: int = MIN_SIDE) -> np.ndarray:
+    """A path or array as a float32 grey image with grey levels in [0, 255].
+
+    Accepts grey (HxW or HxWx1), BGR or BGRA arrays of dtype uint8, uint16,
+    other integers, bool or float. uint16 is divided by 257; floats whose
+    maximum is at most 1 are taken as [0, 1] and multiplied by 255.
+
+    Examples
+    --------
+    >>> to_gray(np.full((10, 12, 3), 255, np.uint8)).shape
+    (10, 12)
+    """
+    label = name
+    if isinstance(image, (str, os.PathLike)):
+        label = str(image)
+        image = read_image(image, max_pixels=max_pixels)
+    if not isinstance(image, np.ndarray):
+        raise ImageValueError(f"{label}: expected a numpy array or a file path, "
+                              f"got {type(image).__name__}")
+    a = image
+    if a.ndim == 3 and a.shape[2] == 1:
+        a = a[:, :, 0]
+    if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[2] not in (3, 4)):
+        raise ImageValueError(f"{label}: expected HxW, HxWx3 or HxWx4, got shape {a.shape}")
+    if a.size == 0:
+        raise ImageSizeError(f"{label}: image is empty (shape {a.shape})")
+    h, w = a.shape[:2]
+    if h * w > max_pixels:
+        raise ImageSizeError(f"{label}: {w}x{h} pixels is over the limit of {max_pixels}")
+    if min(h, w) < min_side:
+        raise ImageSizeError(f"{label}: {w}x{h} is too small (each side must be at "
+                             f"least {min_side} px)")
+    if a.dtype == bool:
+        a = a.astype(np.uint8) * 255
+    if a.dtype.kind == "c" or a.dtype.kind not in "uif":
+        raise ImageValueError(f"{label}: unsupported dtype {a.dtype}")
+    if a.dtype.kind == "f":
+        if not np.isfinite(a).all():
+            raise ImageValueError(f"{label}: contains NaN or infinite values")
+        a = a.astype(np.float32)
+        if a.max(initial=0) <= 1.0 and a.min(initial=0) >= 0.0:
+            a = a * 255.0
+    elif a.dtype == np.uint16:
+        a = a.astype(np.float32) / 257.0
+    elif a.dtype != np.uint8:
+        a = a.astype(np.float32)
+    if a.ndim == 3:
+        code = cv2.COLOR_BGRA2GRAY if a.shape[2] == 4 else cv2.COLOR_BGR2GRAY
+        a = cv2.cvtColor(np.ascontiguousarray(a), code)
+    return np.ascontiguousarray(a, dtype=np.float32)

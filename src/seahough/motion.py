@@ -1,0 +1,120 @@
+"""Photo motion: the previous frame is the pattern, the peak is the motion."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .config import Config
+from .detector import Detector
+from .errors import ParameterError
+from .geometry import pose_to_matrix
+from .imageio import to_gray
+from .pattern import Pattern
+
+
+@dataclass
+class Motion:
+    """Motion of the image content from the previous frame to the current one.
+
+    Attributes
+    ----------
+    matrix : ndarray (2, 3)
+        Previous-frame pixel (x, y) -> current-frame pixel (x, y).
+    dx, dy : float
+        Shift of the previous frame's centre, in current-frame pixels.
+    angle : float
+        Rotation in degrees (counter-clockwise as displayed), in (-180, 180].
+    scale : float
+        Size change (> 1: the camera came closer).
+    confidence : float
+        How distinct the accumulator peak was (0-1).
+    score : float
+        Share of the previous frame's edge points (inside the overlap) found
+        again.
+    overlap : float
+        Share of the previous frame that is still in view.
+    """
+
+    matrix: np.ndarray
+    dx: float
+    dy: float
+    angle: float
+    scale: float
+    confidence: float
+    score: float
+    overlap: float
+
+    def to_dict(self) -> dict:
+        return {"matrix": np.asarray(self.matrix).tolist(), "dx": self.dx, "dy": self.dy,
+                "angle": self.angle, "scale": self.scale, "confidence": self.confidence,
+                "score": self.score, "overlap": self.overlap}
+
+
+#: The configuration estimate_motion uses unless given one: more pattern points,
+#: since a whole frame has far more edges than a marker.
+MOTION_CONFIG = Config(n_pattern_points=256, n_verify_points=600, target_size=320)
+
+
+def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30.0, 30.0), *,
+                    max_shift: float = 0.5, min_confidence: float = 0.15, min_score: float = 0.15,
+                    config: Config | None = None) -> Motion | None:
+    """Motion between two overlapping frames, or None when it cannot tell.
+
+    Parameters
+    ----------
+    previous, current : path or ndarray
+        Two frames of the same camera (same size).
+    scale_range, angle_range : (float, float)
+        Search ranges; a range of one value is a known quantity, and
+        ``scale_range=(1, 1), angle_range=(0, 0)`` is the fast 2-D case
+        (heading and altitude known).
+    max_shift : float
+        Largest shift, as a share of the frame size.
+    min_confidence, min_score : float
+        Below these the motion is reported as unknown (None).
+    """
+    cfg = config or MOTION_CONFIG
+    prev = to_gray(previous, name="previous frame", max_pixels=cfg.max_pixels)
+    cur = to_gray(current, name="current frame", max_pixels=cfg.max_pixels)
+    if not (0 < max_shift <= 1.5):
+        raise ParameterError(f"max_shift={max_shift!r}: must be in (0, 1.5]")
+    pattern = Pattern.from_frame(prev)
+    return motion_from_pattern(pattern, cur, scale_range, angle_range, max_shift=max_shift,
+                               min_confidence=min_confidence, min_score=min_score, config=cfg)
+
+
+def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
+                        angle_range=(-30.0, 30.0), *, max_shift=0.5, min_confidence=0.15,
+                        min_score=0.15, config: Config | None = None, features=None):
+    """:func:`estimate_motion` with the previous frame already made a pattern."""
+    cfg = config or MOTION_CONFIG
+    cur = to_gray(current, name="current frame", max_pixels=cfg.max_pixels)
+    h, w = cur.shape
+    ph, pw = pattern.image.shape
+    if (ph, pw) != (h, w):
+        raise ParameterError(f"frames differ in size: previous {pw}x{ph}, current {w}x{h}")
+    ox, oy = pattern.origin
+    region = (ox - max_shift * w, oy - max_shift * h, ox + max_shift * w, oy + max_shift * h)
+    det = Detector(pattern, scale_range, angle_range, config=cfg, max_results=1,
+                   min_score=min_score, min_confidence=0.0, search_region=region)
+    res = det.search(cur, features=features)
+    if not res.detections:
+        return None
+    d = res.detections[0]
+    if d.confidence < min_confidence:
+        return None
+    m = d.matrix
+    corners = np.array([[0, 0], [w - 1, 0], [w - 1, h - 1], [0, h - 1]], float)
+    overlap = _overlap(m, w, h)
+    angle = (d.angle + 180.0) % 360.0 - 180.0
+    return Motion(m, d.x - ox, d.y - oy, angle, d.scale, d.confidence, d.score, overlap)
+
+
+def _overlap(m, w, h, n=24) -> float:
+    """Share of the previous frame that lands inside the current one."""
+    xs, ys = np.meshgrid(np.linspace(0, w - 1, n), np.linspace(0, h - 1, n))
+    p = np.stack([xs.ravel(), ys.ravel()], 1) @ np.asarray(m)[:, :2].T + np.asarray(m)[:, 2]
+    return float(np.mean((p[:, 0] >= 0) & (p[:, 1] >= 0) & (p[:, 0] <= w - 1) & (p[:, 1] <= h - 1)))

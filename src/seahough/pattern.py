@@ -1,0 +1,361 @@
+"""Patterns: what to look for, built once and searched for many times.
+
+A pattern is an image of the object (a photo crop, a previous frame, or a
+primitive shape rendered anti-aliased) with an origin. Its edges are found by
+the same stages as the image's, so both are described the same way.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from . import _kernels as K
+from .config import Config
+from .errors import ParameterError, PatternError
+from .features import extract_features
+from .imageio import to_gray
+
+POLARITIES = ("bright", "dark", "either")
+_IMAGE_POLARITIES = {"same": "bright", "inverted": "dark", "either": "either",
+                     "bright": "bright", "dark": "dark"}
+
+
+@dataclass
+class PatternFeatures:
+    """A pattern's points at one working scale, relative to its origin.
+
+    ``x, y, angle, weight`` vote; ``x2, y2`` are the other ends of their
+    segments (for equation-5 voting); ``vx, vy, vangle`` are the denser points
+    used to score and refine a pose. Units: working pixels at scale 1.
+    """
+
+    x: np.ndarray
+    y: np.ndarray
+    angle: np.ndarray
+    weight: np.ndarray
+    x2: np.ndarray
+    y2: np.ndarray
+    vx: np.ndarray
+    vy: np.ndarray
+    vangle: np.ndarray
+
+    @property
+    def radius(self) -> float:
+        """Root-mean-square distance of the voting points from the origin."""
+        return float(np.sqrt(np.mean(self.x.astype(float) ** 2 + self.y.astype(float) ** 2)))
+
+
+def _check_positive(**kw):
+    for k, v in kw.items():
+        try:
+            ok = math.isfinite(float(v)) and float(v) > 0
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise ParameterError(f"{k}={v!r}: must be a positive number")
+
+
+def _check_polarity(polarity, allowed=POLARITIES):
+    if polarity not in allowed:
+        raise ParameterError(f"polarity={polarity!r}: must be one of {', '.join(allowed)}")
+
+
+class Pattern:
+    """The object to find.
+
+    Build it with one of the constructors: :meth:`from_image`,
+    :meth:`from_frame`, :meth:`rectangle`, :meth:`line`, :meth:`polygon`,
+    :meth:`circle`. Then hand it to :class:`~seahough.Detector`.
+
+    Attributes
+    ----------
+    image : ndarray
+        The pattern image (uint8 grey); :attr:`Detection.matrix` maps its
+        pixels into the searched image.
+    mask : ndarray or None
+        Which pattern pixels belong to the object.
+    origin : tuple of float
+        Pattern origin in pattern-image pixels: what ``Detection.x, y`` report.
+    polarity : str
+        ``"bright"`` (edges as in the pattern image; for shapes: a bright
+        object on a dark background), ``"dark"`` (inverted) or ``"either"``.
+    outline : list of ndarray
+        Polylines (pattern-image pixels) drawn to show a detection.
+    kind : str
+        ``"image"``, ``"frame"``, ``"rectangle"``, ``"line"``, ``"polygon"``,
+        ``"circle"`` or ``"ring"``.
+
+    Examples
+    --------
+    >>> p = Pattern.rectangle(60, 40)
+    >>> p.image.shape, p.origin
+    ((52, 72), (35.5, 25.5))
+    """
+
+    def __init__(self, image, mask=None, origin=None, *, polarity="bright", kind="image",
+                 outline=None, closed=True, edge_mask=None):
+        gray = to_gray(image, name="pattern")
+        self._gray = gray
+        self.image = np.clip(gray, 0, 255).astype(np.uint8)
+        h, w = gray.shape
+        if mask is not None:
+            mask = to_gray(mask, name="pattern mask") > 0
+            if mask.shape != gray.shape:
+                raise ParameterError(f"pattern mask shape {mask.shape} differs from the "
+                                     f"pattern image shape {gray.shape}")
+            if not mask.any():
+                raise PatternError("pattern mask is empty: no pixel belongs to the object")
+        self.mask = mask
+        if origin is None:
+            origin = ((w - 1) / 2.0, (h - 1) / 2.0)
+        try:
+            origin = (float(origin[0]), float(origin[1]))
+        except (TypeError, ValueError, IndexError):
+            raise ParameterError(f"origin={origin!r}: must be an (x, y) pair") from None
+        if not all(math.isfinite(v) for v in origin):
+            raise ParameterError(f"origin={origin!r}: must be finite")
+        self.origin = origin
+        _check_polarity(polarity)
+        self.polarity = polarity
+        self.kind = kind
+        self.is_line = kind == "line"
+        if outline is None:
+            outline = self._outline_from_mask()
+        self.outline = [np.asarray(o, float).reshape(-1, 2) for o in outline]
+        self.closed = closed
+        self._edge_mask = edge_mask if edge_mask is not None else (
+            None if mask is None else cv2.dilate(mask.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0)
+        self._cache: dict = {}
+        self.features(1.0)  # fails now, not at the first search, if it has no edges
+
+    # ------------------------------------------------------------ constructors
+    @classmethod
+    def from_image(cls, image, mask=None, origin=None, *, polarity="same") -> "Pattern":
+        """A pattern from a photo of the object (a path or an array).
+
+        Parameters
+        ----------
+        image : path or ndarray
+            The object's picture; grey, BGR or BGRA.
+        mask : path or ndarray, optional
+            Non-zero on the object's pixels; edges outside it (dilated by two
+            pixels, so the object's border counts) are ignored.
+        origin : (x, y), optional
+            Pattern origin in its pixel coordinates; default the image centre.
+        polarity : {"same", "inverted", "either"}
+            Whether the object appears with the same contrast as in the
+            pattern image, inverted, or either way.
+        """
+        if polarity not in _IMAGE_POLARITIES:
+            raise ParameterError(f"polarity={polarity!r}: must be one of same, inverted, either")
+        return cls(image, mask, origin, polarity=_IMAGE_POLARITIES[polarity], kind="image")
+
+    @classmethod
+    def from_frame(cls, frame, origin=None) -> "Pattern":
+        """A previous camera frame as the pattern (photo dead reckoning)."""
+        p = cls(frame, None, origin, polarity="bright", kind="frame",
+                outline=None)
+        return p
+
+    @staticmethod
+    def _canvas(w, h, margin):
+        m = int(math.ceil(margin))
+        cw, ch = int(math.ceil(w)) + 2 * m + 1, int(math.ceil(h)) + 2 * m + 1
+        return np.full((ch, cw), 30, np.uint8), m
+
+    @staticmethod
+    def _fill(img, polys, value):
+        pts = [np.round(np.asarray(p, float) * 16).astype(np.int32).reshape(-1, 1, 2) for p in polys]
+        cv2.fillPoly(img, pts, int(value), lineType=cv2.LINE_AA, shift=4)
+
+    @classmethod
+    def _shape(cls, polys, w, h, margin, polarity, kind, outline=None, edge_mask=None,
+               closed=True, holes=()):
+        img, m = cls._canvas(w, h, margin)
+        polys = [np.asarray(p, float) + m for p in polys]
+        cls._fill(img, polys, 230)
+        for hole in holes:
+            cls._fill(img, [np.asarray(hole, float) + m], 30)
+        if outline is None:
+            outline = polys + [np.asarray(hh, float) + m for hh in holes]
+        else:
+            outline = [np.asarray(o, float) + m for o in outline]
+        origin = ((img.shape[1] - 1) / 2.0, (img.shape[0] - 1) / 2.0)
+        _check_polarity(polarity)
+        return cls(img, None, origin, polarity=polarity, kind=kind, outline=outline,
+                   edge_mask=edge_mask, closed=closed)
+
+    @classmethod
+    def rectangle(cls, width, height, *, polarity="bright", margin=6.0) -> "Pattern":
+        """A filled rectangle, ``width`` x ``height`` pixels (the paper's marker).
+
+        ``polarity="bright"`` is a bright rectangle on a darker background.
+        """
+        _check_positive(width=width, height=height)
+        w, h = float(width), float(height)
+        poly = [(0, 0), (w, 0), (w, h), (0, h)]
+        return cls._shape([poly], w, h, margin, polarity, "rectangle")
+
+    @classmethod
+    def polygon(cls, points, *, polarity="bright", margin=6.0) -> "Pattern":
+        """A filled polygon given by its vertices [(x1, y1), (x2, y2), ...]."""
+        try:
+            pts = np.asarray(points, float).reshape(-1, 2)
+        except (TypeError, ValueError):
+            raise ParameterError(f"polygon points {points!r}: expected (x, y) pairs") from None
+        if pts.shape[0] < 3 or not np.isfinite(pts).all():
+            raise ParameterError("polygon needs at least 3 finite (x, y) vertices")
+        pts = pts - pts.min(axis=0)
+        area = 0.5 * abs(np.sum(pts[:, 0] * np.roll(pts[:, 1], -1) - np.roll(pts[:, 0], -1) * pts[:, 1]))
+        if area < 4.0:
+            raise PatternError("polygon encloses (almost) no area")
+        w, h = pts.max(axis=0)
+        return cls._shape([pts], w, h, margin, polarity, "polygon")
+
+    @classmethod
+    def circle(cls, radius, inner_radius=None, *, polarity="bright", margin=6.0) -> "Pattern":
+        """A filled disc, or a ring when ``inner_radius`` is given."""
+        _check_positive(radius=radius)
+        r = float(radius)
+        holes = ()
+        kind = "circle"
+        if inner_radius is not None:
+            _check_positive(inner_radius=inner_radius)
+            if not float(inner_radius) < r:
+                raise ParameterError(f"inner_radius={inner_radius!r} must be smaller than radius={r}")
+            kind = "ring"
+        t = np.linspace(0, 2 * np.pi, max(32, int(2 * np.pi * r)), endpoint=False)
+        outer = np.stack([r + r * np.cos(t), r + r * np.sin(t)], 1)
+        if inner_radius is not None:
+            ri = float(inner_radius)
+            holes = (np.stack([r + ri * np.cos(t), r + ri * np.sin(t)], 1),)
+        return cls._shape([outer], 2 * r, 2 * r, margin, polarity, kind, holes=holes)
+
+    @classmethod
+    def line(cls, length, width, *, polarity="bright", margin=6.0) -> "Pattern":
+        """A straight band ``width`` pixels wide: a rope, tether, cable or pipe.
+
+        Only its two long borders are edges (its ends are not: a rope runs on
+        out of the frame), so the position along the line stays undetermined
+        and detections report the line's direction and offset instead.
+        """
+        _check_positive(length=length, width=width)
+        L, W = float(length), float(width)
+        if L < 2 * W:
+            raise ParameterError(f"line length={L} must be at least twice its width={W}")
+        poly = [(0, 0), (L, 0), (L, W), (0, W)]
+        img, m = cls._canvas(L, W, margin)
+        edge_mask = np.zeros(img.shape, bool)
+        x0, x1 = int(m + min(W, 4)), int(math.ceil(m + L - min(W, 4)))
+        edge_mask[:, x0:x1 + 1] = True
+        outline = [np.array([(0, 0), (L, 0)]), np.array([(0, W), (L, W)])]
+        p = cls._shape([poly], L, W, margin, polarity, "line", outline=outline,
+                       edge_mask=edge_mask, closed=False)
+        p.line_length, p.line_width = L, W
+        return p
+
+    # ------------------------------------------------------------ description
+    def _outline_from_mask(self):
+        h, w = self._gray.shape
+        if self.mask is None:
+            return [np.array([(0, 0), (w - 1, 0), (w - 1, h - 1), (0, h - 1)], float)]
+        cs, _ = cv2.findContours(self.mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+        cs = sorted(cs, key=cv2.contourArea, reverse=True)
+        return [c.reshape(-1, 2).astype(float) for c in cs[:4]] or [
+            np.array([(0, 0), (w - 1, 0), (w - 1, h - 1), (0, h - 1)], float)]
+
+    @functools.cached_property
+    def extent(self) -> float:
+        """Size of the object in pattern pixels (diagonal of its outline's box)."""
+        pts = np.vstack(self.outline)
+        span = pts.max(axis=0) - pts.min(axis=0)
+        return float(max(np.hypot(*span), 1.0))
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """(width, height) of the pattern image."""
+        return self.image.shape[1], self.image.shape[0]
+
+    @property
+    def either(self) -> bool:
+        return self.polarity == "either"
+
+    def features(self, factor: float, config: Config | None = None) -> PatternFeatures:
+        """The pattern's voting and scoring points at a working scale (cached)."""
+        config = config or Config()
+        key = (round(factor, 6), config.n_pattern_points, config.n_verify_points,
+               config.min_gradient, config.segment_steps, config.segment_angle_tol,
+               config.equalize)
+        if key not in self._cache:
+            self._cache[key] = self._compute_features(factor, config)
+        return self._cache[key]
+
+    def _compute_features(self, factor: float, config: Config) -> PatternFeatures:
+        gray = self._gray
+        if self.polarity == "dark":
+            gray = 255.0 - gray
+        em = self._edge_mask
+        mask_w = None
+        if em is not None:
+            if factor < 0.999:
+                h, w = gray.shape
+                nw, nh = max(int(round(w * factor)), 1), max(int(round(h * factor)), 1)
+                mask_w = cv2.resize(em.astype(np.uint8), (nw, nh), interpolation=cv2.INTER_NEAREST) > 0
+            else:
+                mask_w = em
+        # the pattern's own edges: more candidates than it will keep
+        n_edges = gray.size  # all edges above the floor
+        f = extract_features(gray, factor, config, n_keypoints=n_edges, mask=mask_w)
+        seg = f.segments
+        if len(seg) < 8:
+            raise PatternError(
+                f"the pattern has too few edges to be found ({len(seg)} edge segments at "
+                f"scale {factor:.2f}; need at least 8): give it more contrast or size")
+        g = f.gradients
+        # faint texture is not the object's shape: keep the clearly contrasted edges
+        strong = seg.magnitude >= 0.2 * np.percentile(seg.magnitude, 90)
+        seg = seg.take(strong)
+        fx_, fy_ = g.to_full(seg.x, seg.y)
+        ox, oy = self.origin
+        to_rel = lambda xx, yy: ((np.asarray(xx) - ox) * factor, (np.asarray(yy) - oy) * factor)
+        x, y = to_rel(fx_, fy_)
+        x2, y2 = to_rel(*g.to_full(seg.x2, seg.y2))
+        order = np.argsort(-seg.magnitude, kind="stable")
+        vote_ids = _spread(x, y, order, config.n_pattern_points)
+        verify_ids = _spread(x, y, order, config.n_verify_points)
+        w = np.full(vote_ids.size, 1.0 / max(vote_ids.size, 1), np.float32)
+        f32 = lambda a: np.ascontiguousarray(a, np.float32)
+        return PatternFeatures(
+            f32(x[vote_ids]), f32(y[vote_ids]), f32(seg.angle[vote_ids]), w,
+            f32(x2[vote_ids]),
+            f32(y2[vote_ids]), f32(x[verify_ids]), f32(y[verify_ids]), f32(seg.angle[verify_ids]))
+
+    def __repr__(self) -> str:
+        h, w = self.image.shape
+        return f"Pattern(kind={self.kind!r}, size={w}x{h}, origin={self.origin}, polarity={self.polarity!r})"
+
+
+def _spread(x, y, order, count):
+    """``count`` points spread evenly over the pattern's edges, strongest first."""
+    n = x.shape[0]
+    if n <= count:
+        return np.asarray(order, np.int64)
+    x = np.ascontiguousarray(x, np.float64)
+    y = np.ascontiguousarray(y, np.float64)
+    lo, hi = 0.0, float(np.hypot(np.ptp(x), np.ptp(y)))
+    best = None
+    for _ in range(12):  # bisection on the spacing
+        d = 0.5 * (lo + hi)
+        kept = K.spread_points(x, y, order, d, n)
+        if kept.size >= count:
+            best, lo = kept, d
+        else:
+            hi = d
+    if best is None:
+        best = K.spread_points(x, y, order, lo, n)
+    return np.sort(best[:count])

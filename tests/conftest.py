@@ -1,0 +1,35 @@
+"""Shared fixtures: where the real data is, and small synthetic helpers."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from seahough._data import shared_data_dir
+
+DATA = shared_data_dir()
+
+
+def data_path(*parts: str) -> Path:
+    """A file of ../shared/data, or skip the test when the folder is absent."""
+    if DATA is None:
+        pytest.skip("real data (../shared/data) is not present beside this checkout")
+    p = DATA.joinpath(*parts)
+    if not p.exists():
+        pytest.skip(f"{p} is not present")
+    return p
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(1234)
+
+
+def corner_error(matrix_found, matrix_true, shape) -> float:
+    """Largest distance between the pattern image's corners mapped by both."""
+    from seahough.geometry import apply_matrix
+    h, w = shape[:2]
+    c = np.array([[0, 0], [w - 1, 0], [w - 1, h - 1], [0, h - 1]], float)
+    return float(np.max(np.hypot(*(apply_matrix(matrix_found, c) - apply_matrix(matrix_true, c)).T)))

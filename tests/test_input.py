@@ -1,0 +1,137 @@
+"""Image input: every accepted form, and a specific error for every bad one."""
+
+import cv2
+import numpy as np
+import pytest
+
+import seahough
+from seahough import (ImageReadError, ImageSizeError, ImageValueError, ParameterError,
+                      PatternError, SeahoughError)
+from seahough.imageio import to_gray
+
+
+def _scene():
+    img = np.full((120, 160), 40, np.uint8)
+    cv2.rectangle(img, (50, 40), (110, 80), 220, -1)
+    return img
+
+
+@pytest.mark.parametrize("conv", [
+    lambda g: g,
+    lambda g: g[:, :, None],
+    lambda g: cv2.cvtColor(g, cv2.COLOR_GRAY2BGR),
+    lambda g: cv2.cvtColor(g, cv2.COLOR_GRAY2BGRA),
+    lambda g: g.astype(np.uint16) * 257,
+    lambda g: g.astype(np.float32) / 255.0,
+    lambda g: g.astype(np.float64),
+    lambda g: g.astype(np.int32),
+])
+def test_every_accepted_form_gives_the_same_grey_levels(conv):
+    g = _scene()
+    out = to_gray(conv(g))
+    assert out.dtype == np.float32 and out.shape == g.shape
+    assert np.abs(out - g).max() < 1.0
+
+
+def test_paths_are_read(tmp_path):
+    p = tmp_path / "scene.png"
+    cv2.imwrite(str(p), _scene())
+    assert np.array_equal(to_gray(p), _scene().astype(np.float32))
+    assert np.array_equal(to_gray(str(p)), _scene().astype(np.float32))
+
+
+@pytest.mark.parametrize("bad, err, words", [
+    (np.zeros((0, 0), np.uint8), ImageSizeError, "empty"),
+    (np.zeros((1, 1), np.uint8), ImageSizeError, "too small"),
+    (np.zeros((1, 100000), np.uint8), ImageSizeError, "too small"),
+    (np.full((20, 20), np.nan, np.float32), ImageValueError, "NaN"),
+    (np.full((20, 20), np.inf), ImageValueError, "NaN or infinite"),
+    (np.zeros((20, 20, 2), np.uint8), ImageValueError, "shape"),
+    (np.zeros((20, 20), np.complex64), ImageValueError, "dtype"),
+    ([[1, 2], [3, 4]], ImageValueError, "numpy array"),
+])
+def test_bad_arrays_raise_specific_errors(bad, err, words):
+    with pytest.raises(err, match=words):
+        to_gray(bad)
+
+
+def test_bad_files_raise_read_errors_naming_the_file(tmp_path):
+    missing = tmp_path / "nope.png"
+    with pytest.raises(ImageReadError, match="nope.png: no such file"):
+        to_gray(missing)
+    empty = tmp_path / "empty.jpg"
+    empty.write_bytes(b"")
+    with pytest.raises(ImageReadError, match="empty file"):
+        to_gray(empty)
+    text = tmp_path / "text.png"
+    text.write_text("not an image at all")
+    with pytest.raises(ImageReadError, match="text.png"):
+        to_gray(text)
+    ok, buf = cv2.imencode(".jpg", _scene())
+    trunc = tmp_path / "trunc.jpg"
+    trunc.write_bytes(buf.tobytes()[: len(buf) // 2])
+    with pytest.raises(ImageReadError, match="truncated JPEG"):
+        to_gray(trunc)
+
+
+def test_header_claiming_huge_dimensions_is_refused_before_decoding(tmp_path):
+    # a valid small PNG whose IHDR says 100000 x 100000
+    import struct
+    import zlib
+    ok, buf = cv2.imencode(".png", _scene())
+    data = bytearray(buf.tobytes())
+    ihdr = data[12:29]
+    new = b"IHDR" + struct.pack(">II", 100000, 100000) + bytes(ihdr[12:17])
+    data[12:29] = new
+    data[29:33] = struct.pack(">I", zlib.crc32(new) & 0xFFFFFFFF)
+    bomb = tmp_path / "bomb.png"
+    bomb.write_bytes(bytes(data))
+    with pytest.raises(ImageSizeError, match="over the limit"):
+        to_gray(bomb, max_pixels=50_000_000)
+
+
+def test_errors_are_one_hierarchy_and_builtin_compatible():
+    for e in (ImageReadError, ImageSizeError, ImageValueError, ParameterError, PatternError):
+        assert issubclass(e, SeahoughError) and issubclass(e, ValueError)
+    assert issubclass(ImageReadError, OSError)
+
+
+def test_uniform_image_is_a_clear_empty_result_not_an_error():
+    det = seahough.Detector(seahough.Pattern.rectangle(40, 30))
+    res = det.search(np.zeros((120, 160), np.uint8))
+    assert res.detections == [] and res.note == "no edges"
+    assert det.detect(np.full((120, 160), 200, np.uint8)) == []
+
+
+def test_pattern_without_edges_is_refused():
+    with pytest.raises(PatternError, match="too few edges"):
+        seahough.Pattern.from_image(np.full((40, 40), 90, np.uint8))
+
+
+@pytest.mark.parametrize("kw", [
+    dict(scale_range=(2.0, 1.0)), dict(scale_range=(0, 2)), dict(scale_range=(0.5, float("nan"))),
+    dict(angle_range=(10, 5)), dict(angle_range="any"), dict(max_results=0),
+    dict(min_score=1.5), dict(search_region=(10, 10, 5, 50)),
+])
+def test_contradictory_or_out_of_range_parameters_raise_parameter_error(kw):
+    with pytest.raises(ParameterError):
+        seahough.Detector(seahough.Pattern.rectangle(40, 30), **kw)
+
+
+@pytest.mark.parametrize("kw", [dict(downscale=0), dict(downscale=1.5), dict(n_keypoints=0),
+                                dict(voting="magic"), dict(angle_tolerance=0)])
+def test_bad_config_raises_parameter_error_naming_the_field(kw):
+    name = next(iter(kw))
+    with pytest.raises(ParameterError, match=name):
+        seahough.Config(**kw)
+
+
+@pytest.mark.parametrize("make", [
+    lambda: seahough.Pattern.rectangle(-3, 10), lambda: seahough.Pattern.circle(0),
+    lambda: seahough.Pattern.circle(10, inner_radius=12), lambda: seahough.Pattern.line(10, 8),
+    lambda: seahough.Pattern.polygon([(0, 0), (1, 1)]),
+    lambda: seahough.Pattern.rectangle(40, 30, polarity="purple"),
+])
+def test_bad_shape_parameters_raise(make):
+    with pytest.raises((ParameterError, PatternError)):
+        make()
