@@ -27,9 +27,16 @@ def rng():
     return np.random.default_rng(1234)
 
 
-def corner_error(matrix_found, matrix_true, shape) -> float:
-    """Largest distance between the pattern image's corners mapped by both."""
+def corner_error(matrix_found, matrix_true, shape, symmetric: bool = False) -> float:
+    """Largest distance between the pattern image's corners mapped by both.
+
+    ``symmetric``: the pattern looks the same turned by 180 degrees (a plain
+    rectangle), so the corners are compared as a set."""
     from seahough.geometry import apply_matrix
     h, w = shape[:2]
     c = np.array([[0, 0], [w - 1, 0], [w - 1, h - 1], [0, h - 1]], float)
-    return float(np.max(np.hypot(*(apply_matrix(matrix_found, c) - apply_matrix(matrix_true, c)).T)))
+    f, t = apply_matrix(matrix_found, c), apply_matrix(matrix_true, c)
+    if symmetric:
+        d = np.hypot(f[:, None, 0] - t[None, :, 0], f[:, None, 1] - t[None, :, 1])
+        return float(d.min(axis=0).max())
+    return float(np.max(np.hypot(*(f - t).T)))

@@ -241,7 +241,7 @@ class Detector:
         t2 = time.perf_counter()
         timings["voting"] = t2 - t1
         planes = self._planes(bins, best_val, best_k, best_d, proj, g)
-        self._probe = np.stack([pf.vx, pf.vy], 1).astype(float)
+        self._probe = np.stack([pf.vx, pf.vy], 1).astype(float)[:: max(1, pf.vx.size // 64)]
         self._close_px = max(2.0 * bins.step, 3.0)
         cands = self._candidates(pf, features, bins, best_val, best_k, best_d, factor)
         t3 = time.perf_counter()
@@ -270,6 +270,8 @@ class Detector:
         order = np.argsort(-v, kind="stable")[: 4 * n]
         return ys[order], xs[order], v[order]
 
+    _peak_radius = 1
+
     def _candidates(self, pf, features: Features, bins: Bins, best_val, best_k, best_d, factor):
         cfg = self.config
         p = self.pattern
@@ -277,7 +279,7 @@ class Detector:
         if p.is_line:
             radius = max(1, int(round(0.5 * p.line_width * s0 * factor / bins.step)))
         else:
-            radius = int(np.clip(round(0.25 * p.extent * s0 * factor / bins.step), 1, 4))
+            radius = int(np.clip(round(0.25 * p.extent * s0 * factor / bins.step), 1, self._peak_radius))
         ys, xs, vs = self._peaks(best_val, radius, cfg.n_candidates)
         tol = math.radians(cfg.angle_tolerance)
         r0 = max(1.5 * bins.step, 2.0)
@@ -301,16 +303,13 @@ class Detector:
                              score_radius=max(1.25, cfg.match_radius * factor))
             if not self._pose_ok(fit.pose):
                 continue
-            if any(self._same(fit.pose, c.fit.pose, factor) for c in out):
+            # two peaks may converge on one pose; distinct poses all stay
+            # candidates (object-level suppression comes after ranking)
+            if any(self._close(fit.pose, c.fit.pose) for c in out):
                 continue
             out.append(_Candidate(fit, float(v), fit.score))
         out.sort(key=lambda c: -c.work_score)
-        # after refinement two peaks may have converged on one object
-        uniq = []
-        for c in out:
-            if not any(self._same(c.fit.pose, u.fit.pose, factor) for u in uniq):
-                uniq.append(c)
-        return uniq
+        return out
 
     def _pose_ok(self, pose: Pose) -> bool:
         s0, s1 = self.scale_range
@@ -375,15 +374,17 @@ class Detector:
                       score_radius=cfg.match_radius)
 
     def _finish(self, cands, gray, features: Features, factor: float) -> list:
-        p = self.pattern
-        accepted: list[_Candidate] = []
+        """Refine the promising candidates at full resolution, rank them by
+        that score, keep the distinct ones and rate their confidence."""
         pre = 0.75 * self.min_score
-        for c in cands:
+        todo = [c for c in cands if c.work_score >= pre][: self.max_results + 4]
+        for c in todo:
+            c.full = self._full_res(c.fit, gray, features, factor)
+        todo.sort(key=lambda c: -c.full.score)
+        accepted: list[_Candidate] = []
+        for c in todo:
             if len(accepted) >= self.max_results:
                 break
-            if c.work_score < pre:
-                continue
-            c.full = self._full_res(c.fit, gray, features, factor)
             if c.full.score < self.min_score or not self._pose_ok(c.full.pose):
                 continue
             if any(self._same(c.full.pose, a.full.pose, 1.0) for a in accepted):

@@ -1,0 +1,119 @@
+"""Speed and accuracy of the recognition core (issue 2).
+
+Milliseconds per 640x480 frame, single thread, Numba compile time excluded
+(warm-up first) and measured separately in a fresh process with an empty
+cache. Scenes: the simulator's markers pasted into real seabed photos from
+../shared/data (procedural seabed when absent), moderate water, scale
+0.6-1.6, any rotation, 0-20 % hidden.
+
+    python bench/bench_detect.py            # full run (~2 min)
+    python bench/bench_detect.py --quick    # smoke test (~20 s)
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import command, machine  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+import seahough  # noqa: E402
+from seahough import simulate as S  # noqa: E402
+from seahough.geometry import apply_matrix  # noqa: E402
+
+SHAPE = (480, 640)
+
+
+def corner_error(found, truth, shape, symmetric=False):
+    h, w = shape[:2]
+    c = np.array([[0, 0], [w - 1, 0], [w - 1, h - 1], [0, h - 1]], float)
+    f, t = apply_matrix(found, c), apply_matrix(truth, c)
+    if symmetric:
+        d = np.hypot(f[:, None, 0] - t[None, :, 0], f[:, None, 1] - t[None, :, 1])
+        return float(d.min(axis=0).max())
+    return float(np.max(np.hypot(*(f - t).T)))
+
+
+def compile_seconds() -> float:
+    """First detection in a fresh process with an empty Numba cache, minus a warm one."""
+    code = ("import time, numpy as np, seahough; from seahough import simulate as S\n"
+            "img, m = S.marker('board', 120); sc, _, _ = S.marker_scene('board', seed=1, source='procedural')\n"
+            "p = seahough.Pattern.from_image(img, mask=m); d = seahough.Detector(p)\n"
+            "t = time.perf_counter(); d.detect(sc); a = time.perf_counter() - t\n"
+            "t = time.perf_counter(); d.detect(sc); b = time.perf_counter() - t\n"
+            "print(a - b)")
+    with tempfile.TemporaryDirectory() as tmp:
+        env = dict(os.environ, NUMBA_CACHE_DIR=tmp)
+        out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                             check=True)
+    return float(out.stdout.strip().splitlines()[-1])
+
+
+def run_case(det, scenes, symmetric):
+    times, errs, ok = [], [], 0
+    det.detect(scenes[0][0])  # warm-up (Numba compiled or loaded from cache)
+    for scene, truth, shape in scenes:
+        t = time.perf_counter()
+        found = det.detect(scene)
+        times.append(time.perf_counter() - t)
+        if found:
+            e = corner_error(found[0].matrix, truth.matrix, shape, symmetric)
+            errs.append(e)
+            ok += e <= 2.0
+    return ok / len(scenes), (float(np.median(errs)) if errs else float("nan")), 1000 * float(np.median(times))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--quick", action="store_true", help="few scenes, no compile-time measurement")
+    ap.add_argument("--n", type=int, default=None, help="scenes per marker")
+    args = ap.parse_args(argv)
+    n = args.n or (3 if args.quick else 20)
+    print(f"# seahough recognition benchmark\n\nCommand: `{command()}`  \nMachine: {machine()}\n")
+    rows = []
+    modes = ["oriented"] if args.quick else ["oriented", "points", "segments"]
+    for name in S.MARKERS:
+        img, mask = S.marker(name, 120)
+        pattern = seahough.Pattern.from_image(img, mask=mask)
+        scenes = []
+        for i in range(n):
+            scene, _, truth = S.marker_scene(name, SHAPE, scale_range=(0.6, 1.6), occlusion=(0.0, 0.2),
+                                             water="moderate", seed=1000 + i)
+            scenes.append((scene, truth, img.shape))
+        for mode in modes:
+            cfg = seahough.Config(voting=mode)
+            full = seahough.Detector(pattern, (0.5, 2.0), (0, 360), config=cfg)
+            rate, err, ms = run_case(full, scenes, name == "rectangle")
+            rows.append((name, mode, "full: scale 0.5-2, any angle", rate, err, ms))
+        # known scale and rotation (the paper's 2-D case): one detector per scene
+        known_ms, known_ok = [], 0
+        for scene, truth, shape in scenes:
+            det = seahough.Detector(pattern, (truth.scale, truth.scale), (truth.angle, truth.angle))
+            det.detect(scene)
+            t = time.perf_counter()
+            found = det.detect(scene)
+            known_ms.append(1000 * (time.perf_counter() - t))
+            known_ok += bool(found) and corner_error(found[0].matrix, truth.matrix, shape,
+                                                     name == "rectangle") <= 2.0
+        rows.append((name, "oriented", "known scale and angle", known_ok / n, float("nan"),
+                     float(np.median(known_ms))))
+    print(f"{n} scenes per marker, 640x480, moderate water, scale 0.6-1.6, 0-20 % hidden; "
+          "success = all four corners within 2 px.\n")
+    print("| marker | voting | search | success | median corner error (px) | median ms/frame |")
+    print("|---|---|---|---|---|---|")
+    for r in rows:
+        print(f"| {r[0]} | {r[1]} | {r[2]} | {100 * r[3]:.0f} % | {r[4]:.2f} | {r[5]:.1f} |")
+    if not args.quick:
+        print(f"\nNumba compile time (first call, empty cache), excluded above: {compile_seconds():.1f} s")
+
+
+if __name__ == "__main__":
+    main()
