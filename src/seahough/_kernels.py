@@ -245,7 +245,8 @@ def vote(px, py, pang, pw, p2x, p2y,
     filling it, every 2x2 block of translation bins is summed and reduced
     into ``best_val/best_k/best_d`` (the dx-dy plane: best height over scale
     and rotation, and where) and ``proj_sr`` (the rho-phi plane: best height
-    over translation). Votes are weighted by ``pw``.
+    over translation). Votes are weighted by ``pw``, and each pattern point
+    counts at most once in a cell.
     """
     n_rho = rhos.shape[0]
     n_phi = phis.shape[0]
@@ -267,6 +268,10 @@ def vote(px, py, pang, pw, p2x, p2y,
     for k in range(n_rho):
         rr[k] = rhos[k] * inv
     acc = np.zeros((n_rho, nh, nw), np.float32)
+    # who voted last in each cell: a pattern point counts once per cell, so a
+    # cell's height is the number of pattern points supporting it, not the
+    # number of pairs (a straight edge would otherwise pile up votes)
+    stamp = np.full((n_rho, nh, nw), -1, np.int32)
     fnw = float(nw)
     fnh = float(nh)
     for d in range(n_phi):
@@ -276,6 +281,7 @@ def vote(px, py, pang, pw, p2x, p2y,
         acc[:] = 0.0
         for i in range(np_):
             ai = pang[i]
+            tag = d * np_ + i
             pci = math.cos(ai)
             psi = math.sin(ai)
             pxi = px[i]
@@ -315,7 +321,11 @@ def vote(px, py, pang, pw, p2x, p2y,
                         fy = qys[j] - (-rs * pxi + rc * pyi) * inv
                         if fx < 0.0 or fy < 0.0 or fx >= fnw or fy >= fnh:
                             continue
-                        acc[k, int(fy), int(fx)] += wi
+                        iy = int(fy)
+                        ix = int(fx)
+                        if stamp[k, iy, ix] != tag:
+                            stamp[k, iy, ix] = tag
+                            acc[k, iy, ix] += wi
                         continue
                     if mode == MODE_ORIENTED:
                         # rotation of the pair: cos/sin of (a_p - a_q)
@@ -333,7 +343,11 @@ def vote(px, py, pang, pw, p2x, p2y,
                         fy = fy0 - rr[k] * uy
                         if fx < 0.0 or fy < 0.0 or fx >= fnw or fy >= fnh:
                             continue
-                        acc[k, int(fy), int(fx)] += wi
+                        iy = int(fy)
+                        ix = int(fx)
+                        if stamp[k, iy, ix] != tag:
+                            stamp[k, iy, ix] = tag
+                            acc[k, iy, ix] += wi
         # reduce the slice: 2x2 translation blocks
         for k in range(n_rho):
             top = 0.0
@@ -488,6 +502,10 @@ def icp(px, py, pang, a, b, tx, ty, ex, ey, eang, index, radii, iterations, ang_
     mw = np.empty(n)
     scale0 = math.sqrt(a * a + b * b)
     ang0 = math.atan2(b, a)
+    rr = 0.0  # rms radius of the points: how far a change of a, b moves them
+    for i in range(n):
+        rr += px[i] * px[i] + py[i] * py[i]
+    rr = math.sqrt(rr / n) if n > 0 else 0.0
     for ri in range(radii.shape[0]):
         r = radii[ri]
         for _ in range(iterations):
@@ -524,9 +542,9 @@ def icp(px, py, pang, a, b, tx, ty, ex, ey, eang, index, radii, iterations, ang_
                 ntx, nty = sol[2], sol[3]
             if math.sqrt(na * na + nb * nb) < min_scale:
                 break
-            moved = abs(ntx - tx) + abs(nty - ty)
+            moved = abs(ntx - tx) + abs(nty - ty) + (abs(na - a) + abs(nb - b)) * rr
             a, b, tx, ty = na, nb, ntx, nty
-            if moved < 0.01:
+            if moved < 0.02:
                 break
     ids, dist = match_points(px, py, pang, a, b, tx, ty, ex, ey, eang, index, score_radius,
                              ang_tol, either)

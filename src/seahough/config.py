@@ -34,6 +34,15 @@ class Config:
     min_gradient : float
         Gradient magnitude (Scharr units; a step of 1 grey level gives 16)
         below which a pixel is never an edge point.
+    local_contrast : bool
+        Rank edge points by their gradient relative to the mean gradient of
+        their neighbourhood (a window of ``local_window`` working pixels)
+        rather than by the raw gradient, so that the key points are spread
+        over the frame instead of piling up on the few strongest edges (dark
+        rocks, the lit centre of a strobe) and faint objects on smooth sand
+        keep theirs.
+    local_window : int
+        Side of that window, working pixels.
     equalize : bool
         Apply CLAHE (local contrast equalisation) before the gradients; helps
         with uneven strobe light and haze.
@@ -78,6 +87,8 @@ class Config:
     n_verify_points: int = 400
     min_pattern_size: float = 24.0
     min_gradient: float = 48.0
+    local_contrast: bool = True
+    local_window: int = 31
     equalize: bool = False
     segment_steps: int = 2
     segment_angle_tol: float = 30.0
@@ -86,8 +97,8 @@ class Config:
     translation_bin: float | None = None
     angle_bin: float | None = None
     scale_step: float | None = None
-    angle_tolerance: float = 20.0
-    match_radius: float = 2.0
+    angle_tolerance: float = 15.0
+    match_radius: float = 1.5
     n_candidates: int = 8
     refine: bool = True
     max_pixels: int = 200_000_000
@@ -103,6 +114,9 @@ class Config:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
                 bad(name, "must be a positive integer")
+        if isinstance(self.local_window, bool) or not isinstance(self.local_window, int) \
+                or self.local_window < 3:
+            bad("local_window", "must be an integer >= 3")
         if self.target_size < 32:
             bad("target_size", "must be at least 32")
         if self.n_pattern_points < 8:

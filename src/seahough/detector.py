@@ -169,7 +169,7 @@ class Detector:
     """
 
     def __init__(self, pattern: Pattern, scale_range=(0.5, 2.0), angle_range=(0.0, 360.0), *,
-                 config: Config | None = None, max_results: int = 5, min_score: float = 0.35,
+                 config: Config | None = None, max_results: int = 5, min_score: float = 0.5,
                  min_confidence: float = 0.0, search_region=None):
         if not isinstance(pattern, Pattern):
             raise ParameterError(f"pattern must be a seahough.Pattern, got {type(pattern).__name__}")
@@ -242,6 +242,8 @@ class Detector:
         timings["voting"] = t2 - t1
         planes = self._planes(bins, best_val, best_k, best_d, proj, g)
         self._probe = np.stack([pf.vx, pf.vy], 1).astype(float)[:: max(1, pf.vx.size // 64)]
+        hull = cv2.convexHull(np.vstack(p.outline).astype(np.float32)).reshape(-1, 2)
+        self._footprint = hull.astype(float) - np.asarray(p.origin)  # pattern px, from origin
         self._close_px = max(2.0 * bins.step, 3.0)
         cands = self._candidates(pf, features, bins, best_val, best_k, best_d, factor)
         t3 = time.perf_counter()
@@ -271,6 +273,14 @@ class Detector:
         return ys[order], xs[order], v[order]
 
     _peak_radius = 1
+    _overlap = 0.3
+    _good_fit = 0.7
+    _hopeless_fit = 0.3
+    _full_treatment = 6
+    _icp_points = 100
+    _max_radius = 9.0
+    _look_radius = 3.0
+    _top_votes = 3
 
     def _candidates(self, pf, features: Features, bins: Bins, best_val, best_k, best_d, factor):
         cfg = self.config
@@ -282,32 +292,82 @@ class Detector:
             radius = int(np.clip(round(0.25 * p.extent * s0 * factor / bins.step), 1, self._peak_radius))
         ys, xs, vs = self._peaks(best_val, radius, cfg.n_candidates)
         tol = math.radians(cfg.angle_tolerance)
-        r0 = max(1.5 * bins.step, 2.0)
-        radii = (r0, max(0.75 * r0, 1.5), 1.25)
-        out = []
-        for yy, xx, v in zip(ys, xs, vs):
-            if len(out) >= cfg.n_candidates:
-                break
+        # iterate on a subset of the points; score with all of them at the end
+        sub = slice(None, None, max(1, pf.vx.size // self._icp_points))
+        sx, sy, sa = (np.ascontiguousarray(v[sub]) for v in (pf.vx, pf.vy, pf.vangle))
+        score_r = max(1.25, cfg.match_radius * factor)
+        self._hopeless = min(self._hopeless_fit, 0.6 * self.min_score)
+        r0 = float(np.clip(1.5 * bins.step, 2.0, self._max_radius))
+        radii = (r0, max(0.6 * r0, 1.5), 1.25)
+        look_r = min(r0, self._look_radius)
+        # screen every peak with cheap single matching passes, at the cell's
+        # best scale and its neighbours: the cell's best scale can be a bin or
+        # two off (a smaller copy fitting part of the object)
+        looks = []
+        seeds = []
+        ny, nx = best_val.shape
+        for yy, xx, v in list(zip(ys, xs, vs))[: 2 * cfg.n_candidates]:
+            seeds.append((yy, xx, v))
+            # a self-similar shape (L, rectangle) puts a smaller copy in its
+            # own corner: the true cell may sit next to the peak, below it
+            y0, y1, x0, x1 = max(yy - 2, 0), min(yy + 3, ny), max(xx - 2, 0), min(xx + 3, nx)
+            win = best_val[y0:y1, x0:x1]
+            for j in np.argsort(-win, axis=None)[1:]:
+                wy, wx = divmod(int(j), win.shape[1])
+                cy, cx = y0 + wy, x0 + wx
+                dk = abs(int(best_k[cy, cx]) - int(best_k[yy, xx]))
+                dd = abs(int(best_d[cy, cx]) - int(best_d[yy, xx]))
+                if dk >= 2 or dd >= 2:
+                    if win[wy, wx] >= 0.6 * v:
+                        seeds.append((cy, cx, float(win[wy, wx])))
+                    break
+        for yy, xx, v in seeds:
             tx = bins.tx0 + (xx + 1) * bins.step
             ty = bins.ty0 + (yy + 1) * bins.step
-            pose = Pose.from_params(tx, ty, float(bins.scales[best_k[yy, xx]]),
-                                    float(bins.angles[best_d[yy, xx]]))
-            if cfg.refine:
-                fit = refine(pose, pf.vx, pf.vy, pf.vangle, features.edges, features.index,
-                             radii=radii, angle_tol=tol, either=p.either,
-                             fix_scale=bins.scale_known, fix_angle=bins.angle_known,
-                             score_radius=max(1.25, cfg.match_radius * factor))
-            else:
-                fit = refine(pose, pf.vx, pf.vy, pf.vangle, features.edges, features.index,
-                             radii=(), angle_tol=tol, either=p.either,
-                             score_radius=max(1.25, cfg.match_radius * factor))
+            k0 = int(best_k[yy, xx])
+            angle = float(bins.angles[best_d[yy, xx]])
+            by_k = []
+            for k in sorted(range(max(k0 - 1, 0), min(k0 + 2, bins.scales.size)), key=lambda k: abs(k - k0)):
+                pose = Pose.from_params(tx, ty, float(bins.scales[k]), angle)
+                by_k.append((refine(pose, sx, sy, sa, features.edges, features.index, radii=(),
+                                    angle_tol=tol, either=p.either, score_radius=look_r).score, k))
+            by_k.sort(key=lambda t: -t[0])
+            if by_k[0][0] >= self._hopeless or len(looks) < self._top_votes:
+                looks.append((by_k[0][0], float(v), tx, ty, [k for _, k in by_k], angle))
+        # the strongest accumulator peaks are always refined first, whatever
+        # their first look (a big pattern's coarse pose can look poor), then
+        # the others by how well they look
+        looks = looks[: self._top_votes] + sorted(looks[self._top_votes:], key=lambda t: -t[0])
+        out = []
+        for rank, (_, v, tx, ty, ks, angle) in enumerate(looks):
+            if len(out) >= cfg.n_candidates:
+                break
+            start = Pose.from_params(tx, ty, float(bins.scales[ks[0]]), angle)
+            if rank < self._full_treatment and cfg.refine:
+                # scale and position trade off along a corner: a short ICP from
+                # each scale seed, then the full one from the best of them
+                best = -1.0
+                for k in ks:
+                    pose = Pose.from_params(tx, ty, float(bins.scales[k]), angle)
+                    f = refine(pose, sx, sy, sa, features.edges, features.index,
+                               radii=radii[:2], iterations=4, angle_tol=tol, either=p.either,
+                               fix_scale=bins.scale_known, fix_angle=bins.angle_known,
+                               score_radius=score_r)
+                    if f.score > best:
+                        best, start = f.score, f.pose
+            fit = refine(start, sx, sy, sa, features.edges, features.index,
+                         radii=radii if cfg.refine else (), angle_tol=tol, either=p.either,
+                         fix_scale=bins.scale_known, fix_angle=bins.angle_known,
+                         score_radius=score_r, iterations=8)
             if not self._pose_ok(fit.pose):
                 continue
+            fit = refine(fit.pose, pf.vx, pf.vy, pf.vangle, features.edges, features.index,
+                         radii=(), angle_tol=tol, either=p.either, score_radius=score_r)
             # two peaks may converge on one pose; distinct poses all stay
             # candidates (object-level suppression comes after ranking)
             if any(self._close(fit.pose, c.fit.pose) for c in out):
                 continue
-            out.append(_Candidate(fit, float(v), fit.score))
+            out.append(_Candidate(fit, v, fit.score))
         out.sort(key=lambda c: -c.work_score)
         return out
 
@@ -326,7 +386,20 @@ class Detector:
             d = abs(n @ np.array([a.tx - b.tx, a.ty - b.ty]))
             return d < max(p.line_width * factor * max(a.scale, b.scale), 2.0)
         r = 0.35 * p.extent * factor * min(a.scale, b.scale)
-        return math.hypot(a.tx - b.tx, a.ty - b.ty) < r
+        if math.hypot(a.tx - b.tx, a.ty - b.ty) < r:
+            return True
+        # overlapping footprints: a smaller copy in a self-similar shape's
+        # corner, or a turned copy sharing some of its edges
+        fa, fb = self._placed(a, factor), self._placed(b, factor)
+        inter, _ = cv2.intersectConvexConvex(fa, fb)
+        smaller = min(cv2.contourArea(fa), cv2.contourArea(fb))
+        return smaller > 0 and inter > self._overlap * smaller
+
+    def _placed(self, pose: Pose, factor: float) -> np.ndarray:
+        """The pattern's convex footprint placed at ``pose``."""
+        fp = self._footprint * factor
+        qx, qy = pose.map(fp[:, 0], fp[:, 1])
+        return np.stack([qx, qy], 1).astype(np.float32)
 
     def _close(self, a: Pose, b: Pose) -> bool:
         """Practically the same pose: the pattern's points move less than
@@ -336,24 +409,53 @@ class Detector:
         bx, by = b.map(pts[:, 0], pts[:, 1])
         return float(np.max(np.hypot(ax - bx, ay - by))) < self._close_px
 
-    def _full_res(self, fit: Fit, gray, features: Features, factor: float) -> Fit:
+    def _full_pose(self, fit: Fit, features: Features) -> Pose:
+        tx, ty = features.gradients.to_full(fit.pose.tx, fit.pose.ty)
+        return Pose(fit.pose.a, fit.pose.b, float(tx), float(ty))
+
+    def _roi(self, pose: Pose, pf1, shape):
+        """Full-resolution box (x0, y0, x1, y1) holding the pattern at ``pose``."""
+        mx, my = pose.map(pf1.vx, pf1.vy)
+        H, W = shape
+        return (int(max(0, math.floor(mx.min()) - 8)), int(max(0, math.floor(my.min()) - 8)),
+                int(min(W, math.ceil(mx.max()) + 9)), int(min(H, math.ceil(my.max()) + 9)))
+
+    def _full_edges(self, gray, todo, features: Features):
+        """Full-resolution edges for the candidates' boxes: one box around
+        all of them when that is cheaper than one box each."""
+        pf1 = self.pattern.features(1.0, self.config)
+        boxes = [self._roi(self._full_pose(c.fit, features), pf1, gray.shape) for c in todo]
+        area = lambda b: max(b[2] - b[0], 0) * max(b[3] - b[1], 0)
+        union = (min(b[0] for b in boxes), min(b[1] for b in boxes),
+                 max(b[2] for b in boxes), max(b[3] for b in boxes))
+        cache = {}
+
+        def edges_for(box):
+            if box not in cache:
+                x0, y0, x1, y1 = box
+                grad = compute_gradients(np.ascontiguousarray(gray[y0:y1, x0:x1]), 1.0,
+                                         self.config.equalize)
+                e = find_edge_points(grad, self.config.min_gradient)
+                cache[box] = (e, e.index_map())
+            return cache[box]
+
+        if sum(area(b) for b in boxes) >= area(union):
+            return [(union, edges_for) for _ in boxes]
+        return [(b, edges_for) for b in boxes]
+
+    def _full_res(self, fit: Fit, gray, features: Features, factor: float, where=None) -> Fit:
         """Refine a working-resolution fit on the full-resolution image."""
         cfg = self.config
         p = self.pattern
-        g = features.gradients
-        tx, ty = g.to_full(fit.pose.tx, fit.pose.ty)
-        pose = Pose(fit.pose.a, fit.pose.b, float(tx), float(ty))
+        pose = self._full_pose(fit, features)
         pf1 = p.features(1.0, cfg)
         if factor < 0.999:
-            mx, my = pose.map(pf1.vx, pf1.vy)
-            H, W = gray.shape
-            x0 = int(max(0, math.floor(mx.min()) - 8)); x1 = int(min(W, math.ceil(mx.max()) + 9))
-            y0 = int(max(0, math.floor(my.min()) - 8)); y1 = int(min(H, math.ceil(my.max()) + 9))
+            box, edges_for = where
+            x0, y0, x1, y1 = box
             if x1 - x0 < 8 or y1 - y0 < 8:
                 return fit
-            grad = compute_gradients(np.ascontiguousarray(gray[y0:y1, x0:x1]), 1.0, cfg.equalize)
-            edges = find_edge_points(grad, cfg.min_gradient)
-            index = edges.index_map()
+            edges, index = edges_for(box)
+            H, W = gray.shape
             local = Pose(pose.a, pose.b, pose.tx - x0, pose.ty - y0)
             r = 1.0 / factor
             f = refine(local, pf1.vx, pf1.vy, pf1.vangle, edges, index,
@@ -376,10 +478,11 @@ class Detector:
     def _finish(self, cands, gray, features: Features, factor: float) -> list:
         """Refine the promising candidates at full resolution, rank them by
         that score, keep the distinct ones and rate their confidence."""
-        pre = 0.75 * self.min_score
-        todo = [c for c in cands if c.work_score >= pre][: self.max_results + 4]
-        for c in todo:
-            c.full = self._full_res(c.fit, gray, features, factor)
+        pre = 0.85 * self.min_score
+        todo = [c for c in cands if c.work_score >= pre][: self.max_results + 2]
+        wheres = self._full_edges(gray, todo, features) if todo and factor < 0.999 else [None] * len(todo)
+        for c, where in zip(todo, wheres):
+            c.full = self._full_res(c.fit, gray, features, factor, where)
         todo.sort(key=lambda c: -c.full.score)
         accepted: list[_Candidate] = []
         for c in todo:

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .config import Config
-from .keypoints import EdgePoints, find_edge_points, select_keypoints
+from .keypoints import EdgePoints, find_edge_points, local_contrast, select_keypoints
 from .preprocess import Gradients, compute_gradients
 from .segments import Segments, trace_segments
 
@@ -41,7 +41,9 @@ def extract_features(gray: np.ndarray, factor: float, config: Config,
         edges = EdgePoints(*(a[keep] for a in (edges.x, edges.y, edges.angle, edges.magnitude,
                                                 edges.ix, edges.iy)), edges.shape)
     index = edges.index_map()
-    kp = select_keypoints(edges, n_keypoints or config.n_keypoints)
+    strength = (local_contrast(edges, grad.magnitude, config.local_window)
+                if config.local_contrast and len(edges) else None)
+    kp = select_keypoints(edges, n_keypoints or config.n_keypoints, strength)
     seg = trace_segments(edges, kp, config.segment_steps, config.segment_angle_tol,
                          config.max_segments, index)
     return Features(grad, edges, index, kp, seg)

@@ -290,7 +290,7 @@ class Pattern:
         config = config or Config()
         key = (round(factor, 6), config.n_pattern_points, config.n_verify_points,
                config.min_gradient, config.segment_steps, config.segment_angle_tol,
-               config.equalize)
+               config.equalize, config.local_contrast, config.local_window)
         if key not in self._cache:
             self._cache[key] = self._compute_features(factor, config)
         return self._cache[key]
@@ -308,8 +308,9 @@ class Pattern:
                 mask_w = cv2.resize(em.astype(np.uint8), (nw, nh), interpolation=cv2.INTER_NEAREST) > 0
             else:
                 mask_w = em
-        # the pattern's own edges: more candidates than it will keep
-        n_edges = gray.size  # all edges above the floor
+        # the pattern's own edges: the most contrasted, several times more
+        # than it keeps (a small pattern keeps all of them)
+        n_edges = max(config.n_keypoints, 8 * config.n_verify_points)
         f = extract_features(gray, factor, config, n_keypoints=n_edges, mask=mask_w)
         seg = f.segments
         if len(seg) < 8:

@@ -66,7 +66,7 @@ def match(pose: Pose, vx, vy, vang, edges: EdgePoints, index: np.ndarray, radius
 
 
 def refine(pose: Pose, vx, vy, vang, edges: EdgePoints, index: np.ndarray, *,
-           radii=(3.0, 2.0, 1.5), iterations: int = 3, angle_tol: float = math.radians(20),
+           radii=(3.0, 2.0, 1.5), iterations: int = 8, angle_tol: float = math.radians(20),
            either: bool = False, fix_scale: bool = False, fix_angle: bool = False,
            score_radius: float = 1.5, min_scale: float = 1e-3, along: float = 0.02) -> Fit:
     """Refine ``pose`` with shrinking match radii, then score it.

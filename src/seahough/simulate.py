@@ -460,7 +460,7 @@ def background(shape: Shape = (480, 640), seed: int = 0,
 # water
 # ----------------------------------------------------------------------------
 
-@dataclass(frozen=True)
+@dataclass
 class Water:
     """Water and camera degradations (see the module docstring for the model).
 
@@ -483,13 +483,15 @@ class Water:
     blur : float
         Gaussian blur sigma in pixels (forward scatter, defocus).
     noise : float
-        Sensor noise sigma in grey levels.
+        Sensor noise sigma in grey levels (independent per pixel and channel;
+        near-gaussian: a sum of three uniform draws, for speed).
     snow : float
         Marine-snow specks per megapixel (bright gaussian dots 1-4 px).
     jpeg_quality : int or None
         JPEG round-trip quality 1-100, or None for no compression.
 
-    The defaults are the ``"moderate"`` preset.
+    The defaults are the ``"moderate"`` preset; derive variants with
+    ``dataclasses.replace(Water.preset("hard"), jpeg_quality=None)``.
     """
 
     attenuation: tuple[float, float, float] = (0.10, 0.07, 0.42)
@@ -506,9 +508,11 @@ class Water:
         att = tuple(float(v) for v in self.attenuation)
         bs = tuple(float(v) for v in self.backscatter)
         if len(att) != 3 or min(att) < 0:
-            raise ParameterError(f"attenuation must be 3 non-negative numbers, got {self.attenuation!r}")
+            raise ParameterError("attenuation must be 3 non-negative numbers, "
+                                 f"got {self.attenuation!r}")
         if len(bs) != 3 or min(bs) < 0 or max(bs) > 255:
-            raise ParameterError(f"backscatter must be 3 numbers in 0-255, got {self.backscatter!r}")
+            raise ParameterError("backscatter must be 3 numbers in 0-255, "
+                                 f"got {self.backscatter!r}")
         if self.distance < 0:
             raise ParameterError(f"distance must be >= 0, got {self.distance!r}")
         if not 0.0 <= self.strobe <= 1.0:
@@ -711,7 +715,8 @@ def marker(name: str = "board", size: int = 120) -> tuple[np.ndarray, np.ndarray
     image : numpy.ndarray
         uint8 grey canvas.
     mask : numpy.ndarray
-        uint8, 255 on the marker's pixels, 0 elsewhere.
+        uint8 coverage of the marker: 255 inside, 0 outside, anti-aliased
+        (intermediate) along its border.
     """
     if int(size) < 16:
         raise ParameterError(f"marker size must be >= 16 px, got {size!r}")
@@ -737,7 +742,9 @@ def marker(name: str = "board", size: int = 120) -> tuple[np.ndarray, np.ndarray
         mask_cover = render([(0.0, 0.0, sw, sh)])
     else:
         mask_cover = cover
-    mask = np.where(mask_cover >= 0.5, 255, 0).astype(np.uint8)
+    # anti-aliased like the image, so a paste has its edge exactly where the
+    # pattern's is (a binary mask would leave a dark rim inside the border)
+    mask = _to_uint8(255.0 * mask_cover)
     return image, mask
 
 
@@ -745,7 +752,7 @@ def marker(name: str = "board", size: int = 120) -> tuple[np.ndarray, np.ndarray
 # ground truth and pasting
 # ----------------------------------------------------------------------------
 
-@dataclass
+@dataclass(eq=False)
 class Truth:
     """Ground truth of a synthetic scene; fields that do not apply are None.
 
@@ -784,16 +791,44 @@ class Truth:
     motion: np.ndarray | None = None
 
 
+def _object_colour(pattern: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """The object's own colour under a soft mask's border.
+
+    Where the mask is partial, an anti-aliased pattern image holds a mix of
+    the object and its canvas; pasting that through the same soft mask would
+    count the canvas twice (a dark or bright rim). Replace those pixels by the
+    mean of their fully covered neighbours, so the mask alone does the
+    anti-aliasing.
+    """
+    full = (mask >= 255).astype(np.float32)
+    part = (mask > 0) & (mask < 255)
+    if not part.any() or not full.any():
+        return pattern
+    out = pattern.astype(np.float32).copy()
+    p = out if out.ndim == 3 else out[:, :, None]
+    for k in (3, 5, 9):
+        wsum = cv2.blur(full, (k, k))
+        vals = [cv2.blur(p[:, :, c] * full, (k, k)) for c in range(p.shape[2])]
+        ok = part & (wsum > 0)
+        for c in range(p.shape[2]):
+            p[:, :, c][ok] = vals[c][ok] / wsum[ok]
+        part = part & ~ok
+        if not part.any():
+            break
+    return _to_uint8(out)
+
+
 def _blend(under: np.ndarray, over: np.ndarray, alpha: np.ndarray) -> np.ndarray:
     """``under * (1 - alpha) + over * alpha`` for grey or multi-channel float32 images."""
     alpha = np.ascontiguousarray(alpha, dtype=np.float32)
-    if under.ndim == 2:
-        return under * (1.0 - alpha) + over * alpha
-    a3 = cv2.merge([alpha] * under.shape[2])
-    return cv2.add(under, cv2.multiply(cv2.subtract(over, under), a3))
+    under = np.ascontiguousarray(under, dtype=np.float32)
+    over = np.ascontiguousarray(over, dtype=np.float32)
+    # cv2.blendLinear divides by (w1 + w2 + 1e-5): relative error 1e-5
+    return cv2.blendLinear(under, over, 1.0 - alpha, alpha)
 
 
-def _pose_extent(pattern_shape: Shape, origin, scale: float, angle: float) -> tuple[float, float, float, float]:
+def _pose_extent(pattern_shape: Shape, origin, scale: float, angle: float
+                 ) -> tuple[float, float, float, float]:
     """(xmin, xmax, ymin, ymax) of the warped canvas corners relative to (x, y)."""
     m = pose_to_matrix(0.0, 0.0, scale, angle, origin)
     c = apply_matrix(m, _corners(pattern_shape))
@@ -878,21 +913,25 @@ def _occluder(rng: np.random.Generator, mask_w: np.ndarray, target: float, size_
     field = field + 2.2 * ramp
     # keep blobs near the marker
     dist = cv2.distanceTransform((~roi_in).astype(np.uint8), cv2.DIST_L2, 3)
-    field = field - dist / max(0.12 * size_px, 2.0)
+    field = field - (dist / max(0.1 * size_px, 2.0)) ** 2
     vals = field[roi_in]
     wts = mask_w[y0:y1, x0:x1]
     wsum = max(float(wts.sum()), 1e-6)
-    # the blur below rounds the blobs; iterate the threshold so the soft
+    # the blur below rounds the blobs: bisect the threshold so that the soft
     # coverage of the marker matches the target
-    q = 1.0 - target
-    for _ in range(4):
-        thr = float(np.quantile(vals, min(max(q, 0.0), 1.0)))
-        occ = (field > thr).astype(np.float32)
-        soft = cv2.GaussianBlur(occ, (0, 0), 1.2)
+    lo_t, hi_t = float(vals.min()) - 1e-3, float(vals.max())
+    thr = float(np.quantile(vals, 1.0 - target))
+    soft = None
+    for _ in range(24):
+        soft = cv2.GaussianBlur((field > thr).astype(np.float32), (0, 0), 1.0)
         got = float((soft * wts).sum() / wsum)
-        if abs(got - target) < 0.004:
+        if abs(got - target) < 0.002:
             break
-        q -= got - target
+        if got > target:
+            lo_t = thr
+        else:
+            hi_t = thr
+        thr = 0.5 * (lo_t + hi_t)
     return soft, (y0, y1, x0, x1)
 
 
@@ -956,7 +995,8 @@ def paste_pattern(background: np.ndarray, pattern: np.ndarray, mask: np.ndarray 
         mk = np.asarray(mask)
         if mk.shape[:2] != (ph, pw):
             raise ParameterError(f"mask shape {mk.shape} does not match the pattern's {pat.shape}")
-        mk = np.where(mk.reshape(ph, pw, -1)[:, :, 0] > 0, 255, 0).astype(np.uint8)
+        mk = mk.reshape(ph, pw, -1)[:, :, 0].astype(np.uint8)
+        pat = _object_colour(pat, mk)
     org = _centre((ph, pw)) if origin is None else (float(origin[0]), float(origin[1]))
     M = pose_to_matrix(x, y, scale, angle, org)
     h, w = bg.shape[:2]
@@ -966,9 +1006,20 @@ def paste_pattern(background: np.ndarray, pattern: np.ndarray, mask: np.ndarray 
                        flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
     out = _blend(bg.astype(np.float32), warped, a)
 
-    full_area = float(np.count_nonzero(mk)) * scale * scale
+    corners = apply_matrix(M, _corners((ph, pw)))
     in_frame = float(a.sum())
-    outside = max(0.0, full_area - in_frame)
+    if (corners.min() >= -0.5 and corners[:, 0].max() <= w - 0.5
+            and corners[:, 1].max() <= h - 0.5):
+        full_area, outside = in_frame, 0.0
+    else:  # part of the pattern falls outside the scene: measure it on a padded canvas
+        lo = np.floor(np.minimum(corners.min(axis=0), 0.0)) - 2
+        hi = np.ceil(np.maximum(corners.max(axis=0), [w - 1, h - 1])) + 2
+        Mp = M.copy()
+        Mp[:, 2] -= lo
+        size = (int(hi[0] - lo[0]) + 1, int(hi[1] - lo[1]) + 1)
+        full_area = float(cv2.warpAffine(mk.astype(np.float32) * (1.0 / 255.0), Mp, size,
+                                         flags=cv2.INTER_LINEAR).sum())
+        outside = max(0.0, full_area - in_frame)
     covered = 0.0
     if occlusion > 0 and in_frame > 0:
         rng = np.random.default_rng(seed)
@@ -988,7 +1039,7 @@ def paste_pattern(background: np.ndarray, pattern: np.ndarray, mask: np.ndarray 
             covered = float((alpha * a[y0:y1, x0:x1]).sum())
     occluded = 0.0 if full_area <= 0 else min(1.0, (outside + covered) / full_area)
     truth = Truth(matrix=M, x=float(x), y=float(y), scale=float(scale),
-                  angle=float(angle) % 360.0, corners=apply_matrix(M, _corners((ph, pw))),
+                  angle=float(angle) % 360.0, corners=corners,
                   occluded=float(occluded))
     return _to_uint8(out), truth
 
@@ -1095,8 +1146,9 @@ def _render_view(photo: np.ndarray, F: np.ndarray, shape: Shape) -> np.ndarray:
     if mag < 0.9:
         roi = cv2.GaussianBlur(roi, (0, 0), 0.45 * math.sqrt(1.0 / mag ** 2 - 1.0))
     Fr = compose(F, np.array([[1.0, 0.0, x0], [0.0, 1.0, y0]]))
+    # views lie inside the photo: a black border here would reveal a bug
     return cv2.warpAffine(roi, Fr, (w, h), flags=cv2.INTER_LINEAR,
-                          borderMode=cv2.BORDER_REFLECT_101)
+                          borderMode=cv2.BORDER_CONSTANT, borderValue=0)
 
 
 def _as_photo(image) -> np.ndarray | None:
@@ -1242,7 +1294,8 @@ def fragment_scene(image: ImageLike | None = None, *, size: Shape = (160, 160),
         yb = int(min(gm.shape[0], math.ceil(pc[:, 1].max()) + 1))
         if xb <= xa or yb <= ya:
             continue
-        s = (integ[yb, xb] - integ[ya, xb] - integ[yb, xa] + integ[ya, xa]) / ((xb - xa) * (yb - ya))
+        s = ((integ[yb, xb] - integ[ya, xb] - integ[yb, xa] + integ[ya, xa])
+             / ((xb - xa) * (yb - ya)))
         # the rounded patch must still lie inside the scene
         cs = apply_matrix(G_scene, _corners((ph, pw)) + o)
         if cs.min() < 1 or cs[:, 0].max() > w - 2 or cs[:, 1].max() > h - 2:
@@ -1400,29 +1453,32 @@ def rope_scene(shape: Shape = (480, 640), *, width: float = 8, angle: float | No
     bg_seed, water_seed = _seed_of(rng), _seed_of(rng)
     a = float(rng.uniform(0, 180)) if angle is None else float(angle) % 180.0
     off = (float(rng.uniform(-0.35, 0.35) * min(h, w)) if offset is None else float(offset))
-    bg = background((h, w), bg_seed, source).astype(np.float32)
+    bg = background((h, w), bg_seed, source)
     ar = math.radians(a)
     d = np.array([math.cos(ar), -math.sin(ar)], np.float32)
     n = np.array([math.sin(ar), math.cos(ar)], np.float32)
     cx, cy = _centre((h, w))
     xx = (np.arange(w, dtype=np.float32) - cx)[None, :]
     yy = (np.arange(h, dtype=np.float32) - cy)[:, None]
-    s = xx * n[0] + yy * n[1] - off        # across, px from the centre line
-    t = xx * d[0] + yy * d[1]              # along
+    s_full = xx * n[0] + yy * n[1] - np.float32(off)   # across, px from the centre line
     half = 0.5 * float(width)
+    # only the band of the rope and its shadow changes
+    ys, xs = np.nonzero((s_full > -half - 1.0) & (s_full < 3.5 * float(width) + 2.0))
+    s = s_full[ys, xs]
+    t = (xs - np.float32(cx)) * d[0] + (ys - np.float32(cy)) * d[1]  # along the rope
     cover = np.clip(half + 0.5 - np.abs(s), 0.0, 1.0)
     u = np.clip(s / max(half, 0.5), -1.0, 1.0)
     profile = np.sqrt(1.0 - 0.75 * u * u)  # round rope: darker at its sides
     period = max(3.0, 1.4 * float(width))
-    strands = 0.86 + 0.14 * np.cos(2 * math.pi * (t + 0.9 * s) / period)
-    tone = np.array([200.0, 232.0, 246.0]) * rng.uniform(0.95, 1.03)
-    body = profile * strands
-    rope = cv2.merge([body * np.float32(v) for v in tone])
+    strands = 0.86 + 0.14 * np.cos(np.float32(2 * math.pi / period) * (t + 0.9 * s))
+    tone = (np.array([200.0, 232.0, 246.0]) * rng.uniform(0.95, 1.03)).astype(np.float32)
     # a faint shadow beside the rope (light from the upper left)
     shadow = 1.0 - 0.25 * np.exp(-((s - 0.9 * width) / max(width, 1.0)) ** 2)
-    bg = cv2.multiply(bg, cv2.merge([shadow, shadow, shadow]))
-    img = _blend(bg, rope, cover)
-    scene = apply_water(_to_uint8(img), water, water_seed)
+    pix = bg[ys, xs].astype(np.float32) * (shadow * (1.0 - cover))[:, None]
+    pix += (profile * strands * cover)[:, None] * tone
+    img = bg.copy()
+    img[ys, xs] = np.clip(np.rint(pix), 0, 255).astype(np.uint8)
+    scene = apply_water(img, water, water_seed)
     px, py = cx + off * float(n[0]), cy + off * float(n[1])
     truth = Truth(x=px, y=py, line_angle=a, line_offset=off)
     return scene, truth
