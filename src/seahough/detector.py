@@ -276,7 +276,7 @@ class Detector:
     _overlap = 0.3
     _good_fit = 0.7
     _hopeless_fit = 0.3
-    _full_treatment = 6
+    _full_treatment = 4
     _icp_points = 100
     _max_radius = 9.0
     _look_radius = 3.0
@@ -293,8 +293,12 @@ class Detector:
         ys, xs, vs = self._peaks(best_val, radius, cfg.n_candidates)
         tol = math.radians(cfg.angle_tolerance)
         # iterate on a subset of the points; score with all of them at the end
-        sub = slice(None, None, max(1, pf.vx.size // self._icp_points))
+        sub = np.unique(np.linspace(0, pf.vx.size - 1, min(self._icp_points, pf.vx.size)).astype(int))
         sx, sy, sa = (np.ascontiguousarray(v[sub]) for v in (pf.vx, pf.vy, pf.vangle))
+        # the short ICPs that pick a scale seed use half of them, but a big
+        # pattern (a whole frame) needs them all
+        msub = sub[:: 2] if pf.radius < 40 else sub
+        mx, my, ma = (np.ascontiguousarray(v[msub]) for v in (pf.vx, pf.vy, pf.vangle))
         score_r = max(1.25, cfg.match_radius * factor)
         self._hopeless = min(self._hopeless_fit, 0.6 * self.min_score)
         r0 = float(np.clip(1.5 * bins.step, 2.0, self._max_radius))
@@ -349,8 +353,8 @@ class Detector:
                 best = -1.0
                 for k in ks:
                     pose = Pose.from_params(tx, ty, float(bins.scales[k]), angle)
-                    f = refine(pose, sx, sy, sa, features.edges, features.index,
-                               radii=radii[:2], iterations=4, angle_tol=tol, either=p.either,
+                    f = refine(pose, mx, my, ma, features.edges, features.index,
+                               radii=radii[:2], iterations=3, angle_tol=tol, either=p.either,
                                fix_scale=bins.scale_known, fix_angle=bins.angle_known,
                                score_radius=score_r)
                     if f.score > best:
@@ -459,7 +463,7 @@ class Detector:
             local = Pose(pose.a, pose.b, pose.tx - x0, pose.ty - y0)
             r = 1.0 / factor
             f = refine(local, pf1.vx, pf1.vy, pf1.vangle, edges, index,
-                       radii=(1.5 * r, max(r, 2.0), 1.5) if cfg.refine else (),
+                       radii=(max(r, 2.0), 1.5) if cfg.refine else (), iterations=3,
                        angle_tol=math.radians(cfg.angle_tolerance), either=p.either,
                        fix_scale=self.scale_range[0] == self.scale_range[1],
                        fix_angle=self.angle_range[0] == self.angle_range[1],
