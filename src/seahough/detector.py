@@ -487,7 +487,9 @@ class Detector:
         wheres = self._full_edges(gray, todo, features) if todo and factor < 0.999 else [None] * len(todo)
         for c, where in zip(todo, wheres):
             c.full = self._full_res(c.fit, gray, features, factor, where)
-        todo.sort(key=lambda c: -c.full.score)
+        # rank by both scores: the working scale's is smoother (less pixel
+        # noise, JPEG, snow), the full resolution's sharper
+        todo.sort(key=lambda c: -(c.full.score + c.work_score))
         accepted: list[_Candidate] = []
         for c in todo:
             if len(accepted) >= self.max_results:
@@ -498,8 +500,10 @@ class Detector:
                 continue
             accepted.append(c)
         # runner-up: the best candidate that is not (nearly) the same pose as a detection
-        others = [c.work_score for c in cands
-                  if not any(c is a or self._close(c.fit.pose, a.fit.pose) for a in accepted)]
+        # (for a line: not the same line, found at another point along it)
+        same = (lambda c, a: self._same(c.fit.pose, a.fit.pose, factor)) if self.pattern.is_line \
+            else (lambda c, a: self._close(c.fit.pose, a.fit.pose))
+        others = [c.work_score for c in cands if not any(c is a or same(c, a) for a in accepted)]
         runner_up = max(others, default=0.0)
         dets = []
         for c in accepted:
