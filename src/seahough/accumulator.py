@@ -8,6 +8,7 @@ way (scale-rotation).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -50,9 +51,11 @@ class AccumulatorPlanes:
     ----------
     xy : ndarray (ny, nx)
         For each translation, the highest cell over scale and rotation (the
-        dx-dy plane: where). Heights are shares of the pattern's voting points.
+        dx-dy plane: where). Heights count the pattern's voting points that
+        support the cell (1.0 = every point, once), over 2x2 translation bins.
     xy_scale, xy_angle : ndarray (ny, nx)
-        The scale and rotation (degrees) of that highest cell.
+        The scale and rotation (degrees) of that highest cell (computed on
+        first use).
     scale_angle : ndarray (n_scales, n_angles)
         For each scale and rotation, the highest cell over translation.
     scales, angles : ndarray
@@ -61,14 +64,22 @@ class AccumulatorPlanes:
         Full-resolution image coordinates of the ``xy`` columns and rows.
     """
 
-    xy: np.ndarray
-    xy_scale: np.ndarray
-    xy_angle: np.ndarray
-    scale_angle: np.ndarray
-    scales: np.ndarray
-    angles: np.ndarray
-    x: np.ndarray
-    y: np.ndarray
+    def __init__(self, xy, best_k, best_d, scale_angle, scales, angles_deg, x, y):
+        self.xy = xy
+        self._k, self._d = best_k, best_d
+        self.scale_angle = scale_angle
+        self.scales = scales
+        self.angles = angles_deg
+        self.x = x
+        self.y = y
+
+    @functools.cached_property
+    def xy_scale(self) -> np.ndarray:
+        return self.scales[self._k].astype(np.float32)
+
+    @functools.cached_property
+    def xy_angle(self) -> np.ndarray:
+        return self.angles[self._d].astype(np.float32)
 
     @property
     def extent(self) -> tuple[float, float, float, float]:

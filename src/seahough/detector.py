@@ -258,9 +258,8 @@ class Detector:
         cols = bins.tx0 + (np.arange(best_val.shape[1]) + 1) * bins.step
         rows = bins.ty0 + (np.arange(best_val.shape[0]) + 1) * bins.step
         xs, ys = g.to_full(cols, rows)
-        return AccumulatorPlanes(best_val, bins.scales[best_k].astype(np.float32),
-                                 np.degrees(bins.angles[best_d]).astype(np.float32) % 360.0,
-                                 proj, bins.scales.copy(), np.degrees(bins.angles) % 360.0,
+        return AccumulatorPlanes(best_val, best_k, best_d, proj, bins.scales.copy(),
+                                 np.degrees(bins.angles) % 360.0,
                                  np.asarray(xs, float), np.asarray(ys, float))
 
     def _peaks(self, best_val, radius: int, n: int):
@@ -310,8 +309,12 @@ class Detector:
         looks = []
         seeds = []
         ny, nx = best_val.shape
-        for yy, xx, v in list(zip(ys, xs, vs))[: 2 * cfg.n_candidates]:
+        known = bins.scale_known and bins.angle_known
+        n_peaks = self.max_results + 2 if known else 2 * cfg.n_candidates
+        for yy, xx, v in list(zip(ys, xs, vs))[:n_peaks]:
             seeds.append((yy, xx, v))
+            if known:  # one scale, one rotation: nothing to look for beside the peak
+                continue
             # a self-similar shape (L, rectangle) puts a smaller copy in its
             # own corner: the true cell may sit next to the peak, below it
             y0, y1, x0, x1 = max(yy - 2, 0), min(yy + 3, ny), max(xx - 2, 0), min(xx + 3, nx)
@@ -347,7 +350,7 @@ class Detector:
             if len(out) >= cfg.n_candidates:
                 break
             start = Pose.from_params(tx, ty, float(bins.scales[ks[0]]), angle)
-            if rank < self._full_treatment and cfg.refine:
+            if rank < self._full_treatment and cfg.refine and len(ks) > 1:
                 # scale and position trade off along a corner: a short ICP from
                 # each scale seed, then the full one from the best of them
                 best = -1.0
