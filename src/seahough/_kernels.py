@@ -472,13 +472,43 @@ def _solve_pose(px, py, ex, ey, enx, eny, w, m, a, b, fix, along):
         return out
     for r in range(4):
         ata[r, r] += 1e-9
-    if abs(np.linalg.det(ata)) < 1e-12:
+    if not _solve4(ata, atb, out):
         out[0] = np.nan
-        return out
-    sol = np.linalg.solve(ata, atb)
-    for r in range(4):
-        out[r] = sol[r]
     return out
+
+
+@njit(cache=True)
+def _solve4(m, v, out):
+    """Solve the 4x4 system ``m x = v`` into ``out`` by Gaussian elimination
+    with partial pivoting (Numba's np.linalg would need SciPy). Returns False
+    when the system is singular. ``m`` and ``v`` are overwritten."""
+    n = 4
+    for c in range(n):
+        p = c
+        for r in range(c + 1, n):
+            if abs(m[r, c]) > abs(m[p, c]):
+                p = r
+        if abs(m[p, c]) < 1e-12:
+            return False
+        if p != c:
+            for k in range(n):
+                t = m[c, k]
+                m[c, k] = m[p, k]
+                m[p, k] = t
+            t = v[c]
+            v[c] = v[p]
+            v[p] = t
+        for r in range(c + 1, n):
+            f = m[r, c] / m[c, c]
+            for k in range(c, n):
+                m[r, k] -= f * m[c, k]
+            v[r] -= f * v[c]
+    for r in range(n - 1, -1, -1):
+        acc = v[r]
+        for k in range(r + 1, n):
+            acc -= m[r, k] * out[k]
+        out[r] = acc / m[r, r]
+    return True
 
 
 @njit(cache=True)

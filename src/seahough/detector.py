@@ -277,7 +277,7 @@ class Detector:
     _hopeless_fit = 0.3
     _full_treatment = 4
     _icp_points = 100
-    _max_radius = 9.0
+    _max_radius = 6.0
     _look_radius = 3.0
     _top_votes = 3
 

@@ -348,9 +348,12 @@ def _spread(x, y, order, count):
         return np.asarray(order, np.int64)
     x = np.ascontiguousarray(x, np.float64)
     y = np.ascontiguousarray(y, np.float64)
-    lo, hi = 0.0, float(np.hypot(np.ptp(x), np.ptp(y)))
+    # the spacing that leaves about `count` points: edges are lines, so about
+    # n / count pixels; bisect within a bracket around that
+    guess = n / count
+    lo, hi = 0.25 * guess, 2.0 * guess
     best = None
-    for _ in range(12):  # bisection on the spacing
+    for _ in range(7):  # bisection on the spacing
         d = 0.5 * (lo + hi)
         kept = K.spread_points(x, y, order, d, n)
         if kept.size >= count:
