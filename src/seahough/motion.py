@@ -81,9 +81,25 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
     cur = to_gray(current, name="current frame", max_pixels=cfg.max_pixels)
     if not (0 < max_shift <= 1.5):
         raise ParameterError(f"max_shift={max_shift!r}: must be in (0, 1.5]")
-    pattern = Pattern.from_frame(prev)
-    return motion_from_pattern(pattern, cur, scale_range, angle_range, max_shift=max_shift,
-                               min_confidence=min_confidence, min_score=min_score, config=cfg)
+    if prev.shape != cur.shape:
+        raise ParameterError(f"frames differ in size: previous {prev.shape[1]}x{prev.shape[0]}, "
+                             f"current {cur.shape[1]}x{cur.shape[0]}")
+    # static dark or flat borders would vote for "no motion": leave them out
+    b1, b2 = content_box(prev), content_box(cur)
+    x0, y0 = max(b1[0], b2[0]), max(b1[1], b2[1])
+    x1, y1 = min(b1[2], b2[2]), min(b1[3], b2[3])
+    pattern = Pattern.from_frame(prev[y0:y1, x0:x1], config=cfg)
+    m = motion_from_pattern(pattern, cur[y0:y1, x0:x1], scale_range, angle_range,
+                            max_shift=max_shift, min_confidence=min_confidence,
+                            min_score=min_score, config=cfg)
+    if m is None or (x0, y0) == (0, 0):
+        return m
+    full = _uncrop(m.matrix, x0, y0)
+    h, w = prev.shape
+    c = np.array([(w - 1) / 2.0, (h - 1) / 2.0])
+    dx, dy = full[:, :2] @ c + full[:, 2] - c
+    return Motion(full, float(dx), float(dy), m.angle, m.scale, m.confidence, m.score,
+                  _overlap(full, w, h))
 
 
 def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
@@ -111,6 +127,42 @@ def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
     overlap = _overlap(m, w, h)
     angle = (d.angle + 180.0) % 360.0 - 180.0
     return Motion(m, d.x - ox, d.y - oy, angle, d.scale, d.confidence, d.score, overlap)
+
+
+def content_box(gray: np.ndarray, margin: int = 2) -> tuple[int, int, int, int]:
+    """(x0, y0, x1, y1), end exclusive: the frame without its dark or flat
+    border (black lines that video decoders and cameras leave at the edges)
+    and ``margin`` pixels more. Static edges there would vote for "no
+    motion" in every pair."""
+    h, w = gray.shape
+    interior = gray[h // 4: 3 * h // 4, w // 4: 3 * w // 4]
+    level = float(np.median(interior))
+
+    def depth(lines) -> int:
+        k = 0
+        for line in lines:
+            if not (line.mean() < 0.5 * level or line.std() < 1.0):
+                break
+            k += 1
+        return k
+
+    lim_y, lim_x = max(h // 10, 1), max(w // 10, 1)
+    top = depth(gray[i] for i in range(lim_y))
+    bottom = depth(gray[h - 1 - i] for i in range(lim_y))
+    left = depth(gray[:, i] for i in range(lim_x))
+    right = depth(gray[:, w - 1 - i] for i in range(lim_x))
+    box = (left + margin, top + margin, w - right - margin, h - bottom - margin)
+    if box[2] - box[0] < w // 2 or box[3] - box[1] < h // 2:
+        return (0, 0, w, h)
+    return box
+
+
+def _uncrop(m, x0: float, y0: float) -> np.ndarray:
+    """A motion measured on crops starting at (x0, y0), in full-frame pixels."""
+    m = np.asarray(m, float)
+    o = np.array([x0, y0], float)
+    t = m[:, :2] @ (-o) + m[:, 2] + o
+    return np.hstack([m[:, :2], t[:, None]])
 
 
 def _overlap(m, w, h, n=24) -> float:

@@ -54,7 +54,7 @@ from .errors import ImageError, ParameterError, SeahoughError
 from .features import extract_features
 from .geometry import angle_difference, apply_matrix, compose, invert_matrix, matrix_to_pose
 from .imageio import read_image, to_gray
-from .motion import MOTION_CONFIG
+from .motion import MOTION_CONFIG, content_box
 from .pattern import Pattern
 from .preprocess import choose_factor
 
@@ -380,34 +380,6 @@ def _overlap(m, w: int, h: int, n: int = 24) -> float:
     return float(np.mean((p[:, 0] >= 0) & (p[:, 1] >= 0) & (p[:, 0] <= w - 1) & (p[:, 1] <= h - 1)))
 
 
-def _content_box(gray: np.ndarray, margin: int = 2) -> tuple[int, int, int, int]:
-    """(x0, y0, x1, y1), end exclusive: the frame without its dark or flat
-    border (black lines that video decoders and cameras leave at the edges)
-    and ``margin`` pixels more. Static edges there would vote for "no
-    motion" in every pair."""
-    h, w = gray.shape
-    interior = gray[h // 4: 3 * h // 4, w // 4: 3 * w // 4]
-    level = float(np.median(interior))
-
-    def depth(lines) -> int:
-        k = 0
-        for line in lines:
-            if not (line.mean() < 0.5 * level or line.std() < 1.0):
-                break
-            k += 1
-        return k
-
-    lim_y, lim_x = max(h // 10, 1), max(w // 10, 1)
-    top = depth(gray[i] for i in range(lim_y))
-    bottom = depth(gray[h - 1 - i] for i in range(lim_y))
-    left = depth(gray[:, i] for i in range(lim_x))
-    right = depth(gray[:, w - 1 - i] for i in range(lim_x))
-    box = (left + margin, top + margin, w - right - margin, h - bottom - margin)
-    if box[2] - box[0] < w // 2 or box[3] - box[1] < h // 2:
-        return (0, 0, w, h)
-    return box
-
-
 def _shift(m, ox: float, oy: float) -> np.ndarray:
     """``m`` seen in coordinates shifted by (ox, oy): T(-o) m T(o)."""
     m = np.array(m, float)
@@ -434,7 +406,7 @@ class _State:
     """Everything the next frame needs, rebuilt from the rows alone (resume)."""
 
     shape: tuple | None = None          # (h, w) of the first readable frame
-    box: tuple | None = None            # its content box (see _content_box)
+    box: tuple | None = None            # its content box (see motion.content_box)
     key: int | None = None              # keyframe index and its cumulative matrix
     key_cum: np.ndarray | None = None
     key_rate: float | None = None       # score / overlap of the first frame measured on it
@@ -979,7 +951,7 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
         r["_cum"] = None if r["matrix"] is None else np.asarray(r["matrix"], float).reshape(2, 3)
         if r["status"] != "unreadable" and st.shape is None:
             g0 = to_gray(reader.raw(r["index"]), max_pixels=cfg.max_pixels)
-            st.shape, st.box = g0.shape, _content_box(g0)
+            st.shape, st.box = g0.shape, content_box(g0)
         if mpp:
             r["x_m"], r["y_m"] = _metric(r, st.shape, mpp)
         else:
@@ -1040,7 +1012,7 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
                 gray = None
             if gray is not None:
                 if st.shape is None:
-                    st.shape, st.box = gray.shape, _content_box(gray)
+                    st.shape, st.box = gray.shape, content_box(gray)
                     searcher = _Searcher(st.box, scale_range, angle_range, cfg)
                 gray = searcher.crop(gray)
                 if st.key is None:

@@ -98,7 +98,7 @@ class Pattern:
     """
 
     def __init__(self, image, mask=None, origin=None, *, polarity="bright", kind="image",
-                 outline=None, closed=True, edge_mask=None):
+                 outline=None, closed=True, edge_mask=None, config: Config | None = None):
         gray = to_gray(image, name="pattern")
         self._gray = gray
         self.image = np.clip(gray, 0, 255).astype(np.uint8)
@@ -131,7 +131,7 @@ class Pattern:
         self._edge_mask = edge_mask if edge_mask is not None else (
             None if mask is None else cv2.dilate(mask.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0)
         self._cache: dict = {}
-        self.features(1.0)  # fails now, not at the first search, if it has no edges
+        self.features(1.0, config)  # fails now, not at the first search, if it has no edges
 
     # ------------------------------------------------------------ constructors
     @classmethod
@@ -156,11 +156,13 @@ class Pattern:
         return cls(image, mask, origin, polarity=_IMAGE_POLARITIES[polarity], kind="image")
 
     @classmethod
-    def from_frame(cls, frame, origin=None) -> "Pattern":
-        """A previous camera frame as the pattern (photo dead reckoning)."""
-        p = cls(frame, None, origin, polarity="bright", kind="frame",
-                outline=None)
-        return p
+    def from_frame(cls, frame, origin=None, *, config: Config | None = None) -> "Pattern":
+        """A previous camera frame as the pattern (photo dead reckoning).
+
+        ``config`` is the configuration it will be searched with (its
+        features are prepared for it at once).
+        """
+        return cls(frame, None, origin, polarity="bright", kind="frame", config=config)
 
     @staticmethod
     def _canvas(w, h, margin):
