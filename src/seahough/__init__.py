@@ -18,12 +18,14 @@ from .errors import (ImageError, ImageReadError, ImageSizeError, ImageValueError
 from .geometry import matrix_to_pose, pose_to_matrix, solve_segment_pair
 from .imageio import read_image, to_gray
 from .motion import Motion, estimate_motion
+from .odometry import OdometryResult, list_frames, run_odometry
 from .pattern import Pattern
 
 __version__ = "0.1.0"
 
 __all__ = [
     "Config", "Detection", "Detector", "SearchResult", "Pattern", "Motion", "estimate_motion",
+    "run_odometry", "list_frames", "OdometryResult",
     "pose_to_matrix", "matrix_to_pose", "solve_segment_pair", "read_image", "to_gray",
     "SeahoughError", "ImageError", "ImageReadError", "ImageSizeError", "ImageValueError",
     "ParameterError", "PatternError", "__version__",

@@ -44,9 +44,11 @@ class Detection:
         Share of the pattern's edge points found in the image at this pose
         (0-1), after refinement.
     confidence : float
-        How distinct this peak is: ``1 - runner_up / score``, where the
-        runner-up is the best-scoring other candidate that is not one of the
-        returned detections (0: no better than the clutter, 1: unique).
+        How distinct this find is: ``(score - r) / (1 - r)``, where ``r`` is
+        the score of the best other candidate that is not one of the returned
+        detections (the share of what the runner-up leaves unexplained that
+        this find explains; 0: no better than the clutter, 1: unique). Both
+        scores are measured at the working scale.
     matrix : ndarray (2, 3)
         Pattern-image pixel (x, y) -> image pixel (x, y); the matrix
         ``cv2.warpAffine(pattern.image, matrix, (w, h))`` takes.
@@ -112,6 +114,18 @@ class _Candidate:
     votes: float
     work_score: float
     full: Fit | None = None
+
+
+def confidence(score: float, runner_up: float) -> float:
+    """How distinct a find is from the best other candidate: of the pattern
+    that the runner-up leaves unexplained, the share the find explains.
+
+    Examples
+    --------
+    >>> round(confidence(1.0, 0.88), 2), round(confidence(0.55, 0.5), 2)
+    (1.0, 0.1)
+    """
+    return float(np.clip((score - runner_up) / max(1.0 - runner_up, 1e-9), 0.0, 1.0))
 
 
 def line_parameters(x: float, y: float, angle_deg: float, shape) -> tuple[float, float, float, float]:
@@ -510,7 +524,7 @@ class Detector:
         runner_up = max(others, default=0.0)
         dets = []
         for c in accepted:
-            conf = float(np.clip(1.0 - runner_up / max(c.work_score, 1e-9), 0.0, 1.0))
+            conf = confidence(c.work_score, runner_up)
             if conf < self.min_confidence:
                 continue
             dets.append(self._detection(c, conf, gray.shape))
