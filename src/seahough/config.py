@@ -24,7 +24,8 @@ class Config:
         Longest side of the working image when ``downscale`` is None.
     n_keypoints : int
         N, the number of most contrasted edge points kept in the image
-        (the paper uses 1000-2000).
+        (the paper uses 1000-2000; 1200 measured as accurate as 1500 on the
+        benchmark's markers, and faster).
     n_pattern_points : int
         Key points kept on the pattern for voting (the paper: about 100).
     n_verify_points : int
@@ -82,7 +83,7 @@ class Config:
 
     downscale: float | None = None
     target_size: int = 320
-    n_keypoints: int = 1500
+    n_keypoints: int = 1200
     n_pattern_points: int = 128
     n_verify_points: int = 400
     min_pattern_size: float = 24.0

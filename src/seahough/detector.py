@@ -294,6 +294,7 @@ class Detector:
     _max_radius = 6.0
     _look_radius = 3.0
     _top_votes = 3
+    _neighbour_seeds = 6
 
     def _candidates(self, pf, features: Features, bins: Bins, best_val, best_k, best_d, factor):
         cfg = self.config
@@ -324,10 +325,10 @@ class Detector:
         seeds = []
         ny, nx = best_val.shape
         known = bins.scale_known and bins.angle_known
-        n_peaks = self.max_results + 2 if known else 2 * cfg.n_candidates
-        for yy, xx, v in list(zip(ys, xs, vs))[:n_peaks]:
+        n_peaks = self.max_results + 2 if known else cfg.n_candidates + 4
+        for i, (yy, xx, v) in enumerate(list(zip(ys, xs, vs))[:n_peaks]):
             seeds.append((yy, xx, v))
-            if known:  # one scale, one rotation: nothing to look for beside the peak
+            if known or i >= self._neighbour_seeds:  # (one scale, one rotation: nothing beside)
                 continue
             # a self-similar shape (L, rectangle) puts a smaller copy in its
             # own corner: the true cell may sit next to the peak, below it
