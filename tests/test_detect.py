@@ -194,3 +194,24 @@ def test_fragment_of_a_real_frame_found_in_a_rotated_rescaled_degraded_copy():
     found = seahough.Detector(pattern, scale_range=(0.6, 1.5)).detect(copy)
     assert found
     assert corner_error(found[0].matrix, truth[:2], patch.shape) <= 2.0
+
+
+def test_polarity_bright_dark_or_either():
+    # a dark plate on bright sand: found by polarity "dark" and "either", while
+    # "bright" (a bright plate expected) does not find it
+    pattern_img = seahough.Pattern.polygon([(0, 0), (90, 0), (90, 24), (34, 24), (34, 70), (0, 70)]).image
+    bg = np.full((SHAPE[0], SHAPE[1], 3), 200, np.uint8)
+    noise = np.random.default_rng(0).normal(0, 4, bg.shape)
+    mask = np.round(np.clip((pattern_img.astype(np.float32) - 30) / 200, 0, 1) * 255).astype(np.uint8)
+    dark_plate = np.full_like(pattern_img, 40)
+    scene, truth = S.paste_pattern(np.clip(bg + noise, 0, 255).astype(np.uint8), dark_plate, mask,
+                                   x=300, y=220, scale=1.2, angle=35)
+    poly = [(0, 0), (90, 0), (90, 24), (34, 24), (34, 70), (0, 70)]
+    for polarity, expect in (("dark", True), ("either", True), ("bright", False)):
+        found = seahough.Detector(seahough.Pattern.polygon(poly, polarity=polarity)).detect(scene)
+        hit = bool(found) and math.hypot(found[0].x - 300, found[0].y - 220) < 1.0 \
+            and abs((found[0].angle - 35 + 180) % 360 - 180) < 0.5
+        assert hit == expect, (polarity, found[:1])
+    # an image pattern taken from a bright plate finds the dark one when inverted
+    found = seahough.Detector(seahough.Pattern.from_image(pattern_img, polarity="inverted")).detect(scene)
+    assert found and math.hypot(found[0].x - 300, found[0].y - 220) < 1.0
