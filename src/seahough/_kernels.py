@@ -27,21 +27,18 @@ def _wrap_pi(a):
 
 
 # --------------------------------------------------------------------------- edges
-@njit(cache=True)
-def edge_points(mag, gx, gy, floor):
+@njit(cache=True, fastmath=True)
+def edge_points(mag, gx, gy, phase, floor):
     """Non-maximum suppression across the edge, with sub-pixel position.
 
+    ``phase`` is the gradient direction image (radians, [0, 2 pi)).
     Returns ``(x, y, angle, magnitude, ix, iy)`` of every pixel whose gradient
     magnitude is at least ``floor`` and is a local maximum along its gradient
     direction (quantised to 4 directions, as Canny does). The sub-pixel offset
     along that direction comes from a parabola through the three magnitudes.
     """
     h, w = mag.shape
-    n = 0
-    for y in range(1, h - 1):
-        for x in range(1, w - 1):
-            if mag[y, x] >= floor:
-                n += 1
+    n = max((h - 2) * (w - 2), 0)  # at most one point a pixel; trimmed below
     xs = np.empty(n, np.float32)
     ys = np.empty(n, np.float32)
     an = np.empty(n, np.float32)
@@ -81,15 +78,13 @@ def edge_points(mag, gx, gy, floor):
                     off = -0.5
             xs[k] = x + off * sx
             ys[k] = y + off * sy
-            a = math.atan2(ggy, ggx)
-            if a < 0.0:
-                a += TWO_PI
-            an[k] = a
+            an[k] = phase[y, x]
             mg[k] = m
             ix[k] = x
             iy[k] = y
             k += 1
-    return xs[:k], ys[:k], an[:k], mg[:k], ix[:k], iy[:k]
+    return (xs[:k].copy(), ys[:k].copy(), an[:k].copy(), mg[:k].copy(), ix[:k].copy(),
+            iy[:k].copy())
 
 
 @njit(cache=True)

@@ -100,7 +100,7 @@ class Config:
     scale_step: float | None = None
     angle_tolerance: float = 15.0
     match_radius: float = 1.5
-    n_candidates: int = 8
+    n_candidates: int = 7
     refine: bool = True
     max_pixels: int = 200_000_000
 

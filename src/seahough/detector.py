@@ -325,8 +325,10 @@ class Detector:
         seeds = []
         ny, nx = best_val.shape
         known = bins.scale_known and bins.angle_known
-        n_peaks = self.max_results + 2 if known else cfg.n_candidates + 4
+        n_peaks = self.max_results + 1 if known else cfg.n_candidates + 4
         for i, (yy, xx, v) in enumerate(list(zip(ys, xs, vs))[:n_peaks]):
+            if known and v < 0.25 * vs[0]:
+                break  # a sharp 2-D accumulator: far lower peaks cannot reach min_score
             seeds.append((yy, xx, v))
             if known or i >= self._neighbour_seeds:  # (one scale, one rotation: nothing beside)
                 continue
@@ -348,6 +350,9 @@ class Detector:
             ty = bins.ty0 + (yy + 1) * bins.step
             k0 = int(best_k[yy, xx])
             angle = float(bins.angles[best_d[yy, xx]])
+            if known:  # one scale: nothing to choose, refinement will judge it
+                looks.append((float(v), float(v), tx, ty, [k0], angle))
+                continue
             by_k = []
             for k in sorted(range(max(k0 - 1, 0), min(k0 + 2, bins.scales.size)), key=lambda k: abs(k - k0)):
                 pose = Pose.from_params(tx, ty, float(bins.scales[k]), angle)
@@ -500,7 +505,8 @@ class Detector:
     def _finish(self, cands, gray, features: Features, factor: float) -> list:
         """Refine the promising candidates at full resolution, rank them by
         that score, keep the distinct ones and rate their confidence."""
-        pre = 0.85 * self.min_score
+        best = max((c.work_score for c in cands), default=0.0)
+        pre = max(0.85 * self.min_score, 0.6 * best)  # only those that could win
         todo = [c for c in cands if c.work_score >= pre][: self.max_results + 2]
         wheres = self._full_edges(gray, todo, features) if todo and factor < 0.999 else [None] * len(todo)
         for c, where in zip(todo, wheres):
