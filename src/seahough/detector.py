@@ -382,14 +382,19 @@ class Detector:
                                score_radius=score_r)
                     if f.score > best:
                         best, start = f.score, f.pose
-            fit = refine(start, sx, sy, sa, features.edges, features.index,
-                         radii=radii if cfg.refine else (), angle_tol=tol, either=p.either,
-                         fix_scale=bins.scale_known, fix_angle=bins.angle_known,
-                         score_radius=score_r, iterations=8)
-            if not self._pose_ok(fit.pose):
-                continue
-            fit = refine(fit.pose, pf.vx, pf.vy, pf.vangle, features.edges, features.index,
-                         radii=(), angle_tol=tol, either=p.either, score_radius=score_r)
+            if known:  # only the translation moves: refine and score with all points at once
+                fit = refine(start, pf.vx, pf.vy, pf.vangle, features.edges, features.index,
+                             radii=radii if cfg.refine else (), angle_tol=tol, either=p.either,
+                             fix_scale=True, fix_angle=True, score_radius=score_r, iterations=8)
+            else:
+                fit = refine(start, sx, sy, sa, features.edges, features.index,
+                             radii=radii if cfg.refine else (), angle_tol=tol, either=p.either,
+                             fix_scale=bins.scale_known, fix_angle=bins.angle_known,
+                             score_radius=score_r, iterations=8)
+                if not self._pose_ok(fit.pose):
+                    continue
+                fit = refine(fit.pose, pf.vx, pf.vy, pf.vangle, features.edges, features.index,
+                             radii=(), angle_tol=tol, either=p.either, score_radius=score_r)
             # two peaks may converge on one pose; distinct poses all stay
             # candidates (object-level suppression comes after ranking)
             if any(self._close(fit.pose, c.fit.pose) for c in out):

@@ -93,7 +93,7 @@ def local_contrast(edges: EdgePoints, magnitude: np.ndarray, window: int) -> np.
     """
     k = int(window) | 1
     mean = cv2.blur(magnitude, (k, k), borderType=cv2.BORDER_REFLECT)
-    floor = np.float32(max(float(np.mean(magnitude)), 1e-3))
+    floor = np.float32(max(cv2.mean(magnitude)[0], 1e-3))
     return edges.magnitude / (mean[edges.iy, edges.ix] + floor)
 
 

@@ -44,7 +44,7 @@ class PatternFeatures:
     vy: np.ndarray
     vangle: np.ndarray
 
-    @property
+    @functools.cached_property
     def radius(self) -> float:
         """Root-mean-square distance of the voting points from the origin."""
         return float(np.sqrt(np.mean(self.x.astype(float) ** 2 + self.y.astype(float) ** 2)))
