@@ -255,7 +255,8 @@ class Detector:
         t2 = time.perf_counter()
         timings["voting"] = t2 - t1
         planes = self._planes(bins, best_val, best_k, best_d, proj, g)
-        self._probe = np.stack([pf.vx, pf.vy], 1).astype(float)[:: max(1, pf.vx.size // 64)]
+        self._points = np.stack([pf.vx, pf.vy], 1).astype(float)
+        self._probe = self._points[:: max(1, pf.vx.size // 64)]
         hull = cv2.convexHull(np.vstack(p.outline).astype(np.float32)).reshape(-1, 2)
         self._footprint = hull.astype(float) - np.asarray(p.origin)  # pattern px, from origin
         self._close_px = max(2.0 * bins.step, 3.0)
@@ -288,7 +289,6 @@ class Detector:
     _peak_radius = 1
     _overlap = 0.3
     _good_fit = 0.7
-    _hopeless_fit = 0.3
     _full_treatment = 4
     _icp_points = 100
     _max_radius = 6.0
@@ -314,7 +314,6 @@ class Detector:
         msub = sub[:: 2] if pf.radius < 40 else sub
         mx, my, ma = (np.ascontiguousarray(v[msub]) for v in (pf.vx, pf.vy, pf.vangle))
         score_r = max(1.25, cfg.match_radius * factor)
-        self._hopeless = min(self._hopeless_fit, 0.6 * self.min_score)
         r0 = float(np.clip(1.5 * bins.step, 2.0, self._max_radius))
         radii = (r0, max(0.6 * r0, 1.5), 1.25)
         look_r = min(r0, self._look_radius)
@@ -329,7 +328,7 @@ class Detector:
         for i, (yy, xx, v) in enumerate(list(zip(ys, xs, vs))[:n_peaks]):
             if known and v < 0.25 * vs[0]:
                 break  # a sharp 2-D accumulator: far lower peaks cannot reach min_score
-            seeds.append((yy, xx, v))
+            seeds.append((yy, xx, v, True))
             if known or i >= self._neighbour_seeds:  # (one scale, one rotation: nothing beside)
                 continue
             # a self-similar shape (L, rectangle) puts a smaller copy in its
@@ -343,15 +342,15 @@ class Detector:
                 dd = abs(int(best_d[cy, cx]) - int(best_d[yy, xx]))
                 if dk >= 2 or dd >= 2:
                     if win[wy, wx] >= 0.6 * v:
-                        seeds.append((cy, cx, float(win[wy, wx])))
+                        seeds.append((cy, cx, float(win[wy, wx]), False))
                     break
-        for yy, xx, v in seeds:
+        for yy, xx, v, is_peak in seeds:
             tx = bins.tx0 + (xx + 1) * bins.step
             ty = bins.ty0 + (yy + 1) * bins.step
             k0 = int(best_k[yy, xx])
             angle = float(bins.angles[best_d[yy, xx]])
             if known:  # one scale: nothing to choose, refinement will judge it
-                looks.append((float(v), float(v), tx, ty, [k0], angle))
+                looks.append((float(v), float(v), tx, ty, [k0], angle, is_peak))
                 continue
             by_k = []
             for k in sorted(range(max(k0 - 1, 0), min(k0 + 2, bins.scales.size)), key=lambda k: abs(k - k0)):
@@ -359,14 +358,17 @@ class Detector:
                 by_k.append((refine(pose, sx, sy, sa, features.edges, features.index, radii=(),
                                     angle_tol=tol, either=p.either, score_radius=look_r).score, k))
             by_k.sort(key=lambda t: -t[0])
-            if by_k[0][0] >= self._hopeless or len(looks) < self._top_votes:
-                looks.append((by_k[0][0], float(v), tx, ty, [k for _, k in by_k], angle))
+            # the look only orders the seeds: a poor first look can still refine
+            # to the object when nothing better claims the refinement budget
+            looks.append((by_k[0][0], float(v), tx, ty, [k for _, k in by_k], angle, is_peak))
         # the strongest accumulator peaks are always refined first, whatever
         # their first look (a big pattern's coarse pose can look poor), then
         # the others by how well they look
-        looks = looks[: self._top_votes] + sorted(looks[self._top_votes:], key=lambda t: -t[0])
+        top = [i for i, t in enumerate(looks) if t[6]][: self._top_votes]
+        looks = [looks[i] for i in top] + sorted(
+            (t for i, t in enumerate(looks) if i not in top), key=lambda t: -t[0])
         out = []
-        for rank, (_, v, tx, ty, ks, angle) in enumerate(looks):
+        for rank, (_, v, tx, ty, ks, angle, _) in enumerate(looks):
             if len(out) >= cfg.n_candidates:
                 break
             start = Pose.from_params(tx, ty, float(bins.scales[ks[0]]), angle)
@@ -387,10 +389,19 @@ class Detector:
                              radii=radii if cfg.refine else (), angle_tol=tol, either=p.either,
                              fix_scale=True, fix_angle=True, score_radius=score_r, iterations=8)
             else:
-                fit = refine(start, sx, sy, sa, features.edges, features.index,
-                             radii=radii if cfg.refine else (), angle_tol=tol, either=p.either,
-                             fix_scale=bins.scale_known, fix_angle=bins.angle_known,
-                             score_radius=score_r, iterations=8)
+                starts = [start]
+                if not (rank < self._full_treatment and len(ks) > 1) and len(ks) > 1:
+                    starts.append(Pose.from_params(tx, ty, float(bins.scales[ks[1]]), angle))
+                fit = None
+                for st in starts:  # the second-best scale only when the first is not good
+                    f = refine(st, sx, sy, sa, features.edges, features.index,
+                               radii=radii if cfg.refine else (), angle_tol=tol, either=p.either,
+                               fix_scale=bins.scale_known, fix_angle=bins.angle_known,
+                               score_radius=score_r, iterations=8)
+                    if fit is None or f.score > fit.score:
+                        fit = f
+                    if fit.score >= self._good_fit:
+                        break
                 if not self._pose_ok(fit.pose):
                     continue
                 fit = refine(fit.pose, pf.vx, pf.vy, pf.vangle, features.edges, features.index,
@@ -440,6 +451,15 @@ class Detector:
         ax, ay = a.map(pts[:, 0], pts[:, 1])
         bx, by = b.map(pts[:, 0], pts[:, 1])
         return float(np.max(np.hypot(ax - bx, ay - by))) < self._close_px
+
+    def _equivalent(self, a: Pose, b: Pose) -> bool:
+        """The same answer in another guise: the pattern's edge points placed
+        by ``a`` and by ``b`` coincide as sets (a symmetric shape turned onto
+        itself, e.g. a rectangle by 180 degrees)."""
+        ax, ay = a.map(self._probe[:, 0], self._probe[:, 1])
+        bx, by = b.map(self._points[:, 0], self._points[:, 1])
+        d = np.hypot(ax[:, None] - bx[None, :], ay[:, None] - by[None, :]).min(axis=1)
+        return float(np.percentile(d, 90)) < self._close_px
 
     def _full_pose(self, fit: Fit, features: Features) -> Pose:
         tx, ty = features.gradients.to_full(fit.pose.tx, fit.pose.ty)
@@ -531,7 +551,8 @@ class Detector:
         # runner-up: the best candidate that is not (nearly) the same pose as a detection
         # (for a line: not the same line, found at another point along it)
         same = (lambda c, a: self._same(c.fit.pose, a.fit.pose, factor)) if self.pattern.is_line \
-            else (lambda c, a: self._close(c.fit.pose, a.fit.pose))
+            else (lambda c, a: self._close(c.fit.pose, a.fit.pose)
+                  or self._equivalent(c.fit.pose, a.fit.pose))
         others = [c.work_score for c in cands if not any(c is a or same(c, a) for a in accepted)]
         runner_up = max(others, default=0.0)
         dets = []

@@ -107,5 +107,7 @@ def compute_gradients(gray: np.ndarray, factor: float = 1.0, equalize: bool = Fa
     small = np.ascontiguousarray(small, dtype=np.float32)
     gx = cv2.Scharr(small, cv2.CV_32F, 1, 0, borderType=cv2.BORDER_REPLICATE)
     gy = cv2.Scharr(small, cv2.CV_32F, 0, 1, borderType=cv2.BORDER_REPLICATE)
-    mag = cv2.magnitude(gx, gy)
+    # numpy, not cv2.magnitude: OpenCV's result depends on the arrays' memory
+    # alignment in the last bits, which made runs differ from process to process
+    mag = np.sqrt(gx * gx + gy * gy)
     return Gradients(small, gx, gy, mag, fx, fy, gray.shape)

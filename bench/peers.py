@@ -1,0 +1,463 @@
+"""Peer methods for the benchmark suite (bench/run.py), all from OpenCV / numpy.
+
+Every peer returns a :class:`PeerResult` in the suite's conventions: a 2x3
+matrix mapping pattern-image (or previous-frame) pixels to scene
+(current-frame) pixels, as ``cv2.warpAffine`` takes it, or ``None`` when the
+method gives no answer, plus the method's own confidence number.
+
+Peers and the settings used (the documentation each follows is named):
+
+- :class:`FeatureLocator` / :func:`feature_pair` -- SIFT or ORB key points,
+  k=2 matching (SIFT: FLANN k-d trees, 5 trees, 50 checks, as in OpenCV's
+  FLANN matching tutorial; ORB: brute force, Hamming) with Lowe's ratio test
+  (0.75), then
+  ``cv2.estimateAffinePartial2D`` (RANSAC, reprojection threshold 3 px, OpenCV
+  defaults otherwise: 2000 iterations, confidence 0.99, 10 refinement
+  iterations). SIFT: ``cv2.SIFT_create()`` defaults. ORB:
+  ``cv2.ORB_create(nfeatures=1500)`` (the default 500 is too few for a small
+  marker among seabed clutter). Pattern images are padded
+  by 32 px (border replicated, key points only inside the original) so ORB's
+  31 px ``edgeThreshold`` does not leave a small pattern without key points.
+  Confidence: the RANSAC inlier count. "Detected" (for false alarms) follows
+  OpenCV's feature-homography tutorial: at least ``MIN_MATCH_COUNT = 10``
+  ratio-test matches and a model.
+- :class:`GHTGuil` -- ``cv2.createGeneralizedHoughGuil`` with the settings of
+  OpenCV's "Object detection with Generalized Ballard and Guil Hough
+  Transform" tutorial (MinDist 10, Levels 360, MaxBufferSize 1000, angle
+  0-360 step 1, AngleThresh 1500, ScaleThresh 50, PosThresh 10) except scale
+  step 0.025 (the tutorial's 0.05 leaves ~4 px corner error) and Canny 60/180
+  (the tutorial's 30/110 times out more often on seabed clutter), the scale
+  range set to cover the task, run on images
+  downscaled by 2 with Dp 1 (so 2 full-resolution px per position bin): at
+  full resolution one 640x480 search takes 1-3 s on this machine. The
+  template is the pattern's Canny edges (inside its dilated mask) with Sobel
+  gradients, exactly as ``setTemplate(image)`` computes them internally. Each
+  search runs in a worker process killed after ``timeout`` seconds (a
+  time-out is a failure). Confidence: the position votes of the best
+  candidate.
+- :func:`phase_correlation` -- ``cv2.phaseCorrelate`` on grey float frames
+  with a Hann window (``cv2.createHanningWindow``), translation only.
+- :func:`fourier_mellin` -- log-polar FFT registration (Reddy & Chatterji
+  1996), implemented here with numpy FFT + ``cv2.warpPolar``: magnitude
+  spectra of Hann-windowed centre squares, high-pass emphasis, log-polar
+  resampling, ``cv2.phaseCorrelate`` for rotation and scale (both 180 degree
+  solutions tried), then ``cv2.phaseCorrelate`` for the translation of the
+  de-rotated, de-scaled frame.
+- :func:`hough_rope` -- ``cv2.HoughLinesWithAccumulator`` (rho 1 px, theta
+  0.5 degree) or ``cv2.HoughLinesP`` on ``cv2.Canny`` edges (50/150 after a
+  sigma-1 Gaussian blur, as in OpenCV's Hough line tutorial), the two rope
+  borders paired (parallel within 2 degrees, 0.5-1.6 rope widths apart), the
+  strongest line as fallback.
+"""
+
+from __future__ import annotations
+
+import math
+import multiprocessing as mp
+import time
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+RATIO = 0.75
+RANSAC_PX = 3.0
+MIN_MATCH_COUNT = 10
+
+
+@dataclass
+class PeerResult:
+    """A peer's answer: ``matrix`` (2x3, or None), its confidence number,
+    whether it counts as a detection by the method's own rule, and (for
+    methods timed inside a worker) its own time in seconds."""
+
+    matrix: np.ndarray | None
+    confidence: float = 0.0
+    detected: bool = False
+    seconds: float | None = None
+    timed_out: bool = False
+
+
+def grey(img) -> np.ndarray:
+    img = np.asarray(img)
+    if img.ndim == 3:
+        img = cv2.cvtColor(img, cv2.COLOR_BGRA2GRAY if img.shape[2] == 4 else cv2.COLOR_BGR2GRAY)
+    if img.dtype != np.uint8:
+        img = np.clip(img, 0, 255).astype(np.uint8)
+    return img
+
+
+# --------------------------------------------------------------------------
+# SIFT / ORB + RANSAC
+# --------------------------------------------------------------------------
+
+def _make(kind: str):
+    if kind == "sift":
+        # FLANN k-d trees, as in OpenCV's "Feature Matching with FLANN" tutorial (a
+        # brute-force matcher takes 8 s on a pair of 1280x720 pool frames, FLANN 0.5 s)
+        return cv2.SIFT_create(), cv2.FlannBasedMatcher(dict(algorithm=1, trees=5),
+                                                         dict(checks=50))
+    if kind == "sift-lowc":
+        # the same with a lower contrast threshold (default 0.04): many more key points
+        # in murky, low-contrast water, at about twice the time
+        return cv2.SIFT_create(contrastThreshold=0.01), cv2.FlannBasedMatcher(
+            dict(algorithm=1, trees=5), dict(checks=50))
+    if kind == "orb":
+        return cv2.ORB_create(nfeatures=1500), cv2.BFMatcher(cv2.NORM_HAMMING)
+    raise ValueError(kind)
+
+
+_PAD = 32
+
+
+def _pattern_features(det, img, mask=None):
+    """Key points of a (small) pattern image, padded so ORB can use its borders."""
+    g = grey(img)
+    h, w = g.shape
+    big = cv2.copyMakeBorder(g, _PAD, _PAD, _PAD, _PAD, cv2.BORDER_REPLICATE)
+    m = np.zeros(big.shape, np.uint8)
+    if mask is None:
+        m[_PAD:_PAD + h, _PAD:_PAD + w] = 255
+    else:
+        mk = (grey(mask) > 0).astype(np.uint8) * 255
+        m[_PAD:_PAD + h, _PAD:_PAD + w] = cv2.dilate(mk, np.ones((5, 5), np.uint8))
+    kp, des = det.detectAndCompute(big, m)
+    pts = np.array([k.pt for k in kp], np.float32).reshape(-1, 2) - _PAD
+    return pts, des
+
+
+def _ratio_matches(matcher, des_a, des_b):
+    if des_a is None or des_b is None or len(des_a) < 2 or len(des_b) < 2:
+        return []
+    good = []
+    for pair in matcher.knnMatch(des_a, des_b, k=2):
+        if len(pair) == 2 and pair[0].distance < RATIO * pair[1].distance:
+            good.append(pair[0])
+    return good
+
+
+def _ransac(pts_a, pts_b, good) -> PeerResult:
+    if len(good) < 3:
+        return PeerResult(None, 0.0, False)
+    src = np.float32([pts_a[m.queryIdx] for m in good]).reshape(-1, 1, 2)
+    dst = np.float32([pts_b[m.trainIdx] for m in good]).reshape(-1, 1, 2)
+    M, inl = cv2.estimateAffinePartial2D(src, dst, method=cv2.RANSAC,
+                                         ransacReprojThreshold=RANSAC_PX)
+    if M is None:
+        return PeerResult(None, 0.0, False)
+    n_in = int(inl.sum()) if inl is not None else 0
+    return PeerResult(M.astype(float), float(n_in), len(good) >= MIN_MATCH_COUNT)
+
+
+class FeatureLocator:
+    """SIFT or ORB + ratio test + RANSAC partial affine: pattern -> scene."""
+
+    def __init__(self, kind: str, pattern_img, mask=None):
+        self.kind = kind
+        self.det, self.matcher = _make(kind)
+        self.pts, self.des = _pattern_features(self.det, pattern_img, mask)
+
+    def locate(self, scene) -> PeerResult:
+        kp, des = self.det.detectAndCompute(grey(scene), None)
+        pts = np.array([k.pt for k in kp], np.float32).reshape(-1, 2)
+        return _ransac(self.pts, pts, _ratio_matches(self.matcher, self.des, des))
+
+
+def feature_pair(kind: str, prev, cur, _cache={}) -> PeerResult:
+    """SIFT/ORB + RANSAC motion, previous frame -> current frame."""
+    if kind not in _cache:
+        _cache[kind] = _make(kind)
+    det, matcher = _cache[kind]
+    kp1, d1 = det.detectAndCompute(grey(prev), None)
+    kp2, d2 = det.detectAndCompute(grey(cur), None)
+    p1 = np.array([k.pt for k in kp1], np.float32).reshape(-1, 2)
+    p2 = np.array([k.pt for k in kp2], np.float32).reshape(-1, 2)
+    return _ransac(p1, p2, _ratio_matches(matcher, d1, d2))
+
+
+# --------------------------------------------------------------------------
+# Generalized Hough (Guil), in a worker process with a time cap
+# --------------------------------------------------------------------------
+
+GHT_DOWNSCALE = 0.5
+GHT_CANNY = (60, 180)
+GHT_SCALE_STEP = 0.025
+
+
+def _ght_make(scale_range, angle_range):
+    g = cv2.createGeneralizedHoughGuil()
+    g.setMinDist(10)
+    g.setLevels(360)
+    g.setDp(1)
+    g.setMaxBufferSize(1000)
+    g.setMinAngle(float(angle_range[0]))
+    g.setMaxAngle(float(angle_range[1]))
+    g.setAngleStep(1.0)
+    g.setAngleThresh(1500)
+    g.setMinScale(float(scale_range[0]))
+    g.setMaxScale(float(scale_range[1]))
+    g.setScaleStep(GHT_SCALE_STEP)
+    g.setScaleThresh(50)
+    g.setPosThresh(10)
+    g.setCannyLowThresh(GHT_CANNY[0])
+    g.setCannyHighThresh(GHT_CANNY[1])
+    return g
+
+
+def _ght_template(img, mask, f):
+    g = grey(img)
+    if f != 1.0:
+        g = cv2.resize(g, None, fx=f, fy=f, interpolation=cv2.INTER_AREA)
+    edges = cv2.Canny(g, GHT_CANNY[0], GHT_CANNY[1])
+    if mask is not None:
+        m = (grey(mask) > 0).astype(np.uint8)
+        if f != 1.0:
+            m = cv2.resize(m, (g.shape[1], g.shape[0]), interpolation=cv2.INTER_NEAREST)
+        m = cv2.dilate(m, np.ones((5, 5), np.uint8))
+        edges[m == 0] = 0
+    dx = cv2.Sobel(g, cv2.CV_32F, 1, 0)
+    dy = cv2.Sobel(g, cv2.CV_32F, 0, 1)
+    return edges, dx, dy, g.shape
+
+
+def _ght_worker(conn):
+    cv2.setNumThreads(1)
+    ght, centre, f = None, None, 1.0
+    while True:
+        msg = conn.recv()
+        if msg is None:
+            break
+        if msg[0] == "template":
+            _, img, mask, scale_range, angle_range, f = msg
+            ght = _ght_make(scale_range, angle_range)
+            edges, dx, dy, (h, w) = _ght_template(img, mask, f)
+            # OpenCV's default template centre: (cols / 2, rows / 2), integer division
+            centre = (w // 2, h // 2)
+            ght.setTemplate(edges, dx, dy, centre)
+            conn.send(("ok", centre))
+        else:
+            _, scene = msg
+            t = time.perf_counter()
+            g = grey(scene)
+            if f != 1.0:
+                g = cv2.resize(g, None, fx=f, fy=f, interpolation=cv2.INTER_AREA)
+            pos, votes = ght.detect(g)
+            dt = time.perf_counter() - t
+            conn.send((pos, votes, dt))
+
+
+class GHTGuil:
+    """OpenCV's Generalized Hough (Guil) with a per-search time cap."""
+
+    def __init__(self, timeout: float = 5.0, downscale: float = GHT_DOWNSCALE):
+        self.timeout = float(timeout)
+        self.f = float(downscale)
+        self._ctx = mp.get_context("fork")
+        self._proc = None
+        self._conn = None
+        self._template = None
+
+    def _start(self):
+        a, b = self._ctx.Pipe()
+        self._proc = self._ctx.Process(target=_ght_worker, args=(b,), daemon=True)
+        self._proc.start()
+        self._conn = a
+        if self._template is not None:
+            self._send_template()
+
+    def _send_template(self):
+        img, mask, sr, ar = self._template
+        self._conn.send(("template", img, mask, sr, ar, self.f))
+        _, self._centre = self._conn.recv()
+        self._shape = grey(img).shape
+
+    def set_template(self, img, mask, scale_range, angle_range):
+        self._template = (np.ascontiguousarray(grey(img)), None if mask is None else grey(mask),
+                          tuple(scale_range), tuple(angle_range))
+        if self._proc is None or not self._proc.is_alive():
+            self._start()
+        else:
+            self._send_template()
+
+    def locate(self, scene) -> PeerResult:
+        if self._proc is None or not self._proc.is_alive():
+            self._start()
+        self._conn.send(("detect", np.ascontiguousarray(scene)))
+        if not self._conn.poll(self.timeout):
+            self.close()  # kill the stuck search; the next call starts a fresh worker
+            return PeerResult(None, 0.0, False, self.timeout, True)
+        pos, votes, dt = self._conn.recv()
+        if pos is None or len(pos) == 0:
+            return PeerResult(None, 0.0, False, dt)
+        pos = pos.reshape(-1, 4)
+        votes = votes.reshape(-1, 3)
+        i = int(np.argmax(votes[:, 0]))
+        x, y, s, a = (float(v) for v in pos[i])
+        f = self.f
+        # Guil's angle is clockwise as displayed (x right, y down)
+        th = math.radians(a)
+        c, sn = math.cos(th), math.sin(th)
+        # full-res pattern px q -> working px f*q (+ (f-1)/2 pixel-centre shift)
+        # -> rotate/scale about the working template centre -> full-res scene px
+        off = 0.5 * (f - 1.0) if f != 1.0 else 0.0
+        A = s * np.array([[c, -sn], [sn, c]])
+        # scene_work = A (f q + off - centre) + pos; scene_full = (scene_work - off) / f
+        lin = A  # (f q) scaled by 1/f cancels f
+        tr = (A @ (np.array([off, off]) - np.asarray(self._centre, float)) + [x, y] - off) / f
+        M = np.hstack([lin, tr[:, None]])
+        return PeerResult(M, float(votes[i, 0]), True, dt)
+
+    def close(self):
+        if self._proc is not None:
+            if self._proc.is_alive():
+                self._proc.kill()
+            self._proc.join(timeout=2)
+        self._proc = None
+        self._conn = None
+
+
+# --------------------------------------------------------------------------
+# Phase correlation and Fourier-Mellin
+# --------------------------------------------------------------------------
+
+def _float_grey(img) -> np.ndarray:
+    return grey(img).astype(np.float64)
+
+
+def phase_correlation(prev, cur) -> PeerResult:
+    """Translation only: ``cv2.phaseCorrelate`` with a Hann window."""
+    a, b = _float_grey(prev), _float_grey(cur)
+    win = cv2.createHanningWindow((a.shape[1], a.shape[0]), cv2.CV_64F)
+    (dx, dy), resp = cv2.phaseCorrelate(a, b, win)
+    M = np.array([[1.0, 0.0, dx], [0.0, 1.0, dy]])
+    return PeerResult(M, float(resp), True)
+
+
+_FM_SIZE = 256
+
+
+def _highpass(n: int) -> np.ndarray:
+    """Reddy-Chatterji emphasis filter for a centred (fftshift) spectrum."""
+    f = np.fft.fftshift(np.fft.fftfreq(n))
+    x = np.cos(np.pi * f[None, :]) * np.cos(np.pi * f[:, None])
+    return (1.0 - x) * (2.0 - x)
+
+
+def _logpolar_spectrum(g: np.ndarray, n: int) -> tuple[np.ndarray, float]:
+    h, w = g.shape
+    s = min(h, w)
+    y0, x0 = (h - s) // 2, (w - s) // 2
+    sq = cv2.resize(g[y0:y0 + s, x0:x0 + s], (n, n), interpolation=cv2.INTER_AREA)
+    win = cv2.createHanningWindow((n, n), cv2.CV_64F)
+    spec = np.abs(np.fft.fftshift(np.fft.fft2((sq - sq.mean()) * win)))
+    spec *= _highpass(n)
+    radius = n / 2.0
+    lp = cv2.warpPolar(spec, (n, n), (n / 2.0, n / 2.0), radius,
+                       cv2.WARP_POLAR_LOG | cv2.INTER_LINEAR)
+    return lp, radius
+
+
+def fourier_mellin(prev, cur) -> PeerResult:
+    """Rotation + scale + translation by log-polar FFT registration."""
+    a, b = _float_grey(prev), _float_grey(cur)
+    h, w = a.shape
+    n = _FM_SIZE
+    la, radius = _logpolar_spectrum(a, n)
+    lb, _ = _logpolar_spectrum(b, n)
+    # rows of the warpPolar output = angle (0..360 over n rows), columns = log radius
+    win = cv2.createHanningWindow((n, n), cv2.CV_64F)
+    (sx, sy), _ = cv2.phaseCorrelate(la, lb, win)
+    # the spectrum of the current frame is turned like the image and shrunk by the scale
+    angle = -360.0 * sy / n          # degrees, counter-clockwise as displayed
+    scale = math.exp(-sx * math.log(radius) / n)
+    c = np.array([(w - 1) / 2.0, (h - 1) / 2.0])
+    win_full = cv2.createHanningWindow((w, h), cv2.CV_64F)
+    best = None
+    for ang in (angle, angle + 180.0):
+        th = math.radians(ang)
+        R = scale * np.array([[math.cos(th), math.sin(th)], [-math.sin(th), math.cos(th)]])
+        A = np.hstack([R, (c - R @ c)[:, None]])      # rotation/scale about the centre
+        # b'(y) = b(A y): b' is the previous frame shifted by u = R^-1 t
+        bw = cv2.warpAffine(b, A, (w, h), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
+        (ux, uy), resp = cv2.phaseCorrelate(a, bw, win_full)
+        t = R @ np.array([ux, uy])
+        M = np.hstack([R, (c - R @ c + t)[:, None]])
+        if best is None or resp > best.confidence:
+            best = PeerResult(M, float(resp), True)
+    return best
+
+
+# --------------------------------------------------------------------------
+# Ropes: Hough lines on Canny edges
+# --------------------------------------------------------------------------
+
+def _edges(scene) -> np.ndarray:
+    g = cv2.GaussianBlur(grey(scene), (0, 0), 1.0)
+    return cv2.Canny(g, 50, 150)
+
+
+def line_from_normal(theta: float, rho: float, shape) -> tuple[float, float]:
+    """(line_angle, line_offset) in the simulator's convention from a Hough
+    line ``x cos(theta) + y sin(theta) = rho``."""
+    h, w = shape[:2]
+    c = np.array([(w - 1) / 2.0, (h - 1) / 2.0])
+    a = (90.0 - math.degrees(theta)) % 180.0
+    n = np.array([math.sin(math.radians(a)), math.cos(math.radians(a))])
+    p0 = rho * np.array([math.cos(theta), math.sin(theta)])
+    return a, float(n @ (p0 - c))
+
+
+def _pair(lines, width):
+    """First pair (by rank) of near-parallel lines 0.5-1.6 widths apart: their mid-line."""
+    best = None
+    k = min(len(lines), 12)
+    for i in range(k):
+        for j in range(i + 1, k):
+            t1, r1 = lines[i][:2]
+            t2, r2 = lines[j][:2]
+            # bring both to a common normal orientation
+            d = (math.degrees(t2 - t1) + 90.0) % 180.0 - 90.0
+            if abs(d) > 2.0:
+                continue
+            if abs(math.degrees(t2 - t1)) > 90.0:  # normals opposite: flip the second
+                r2 = -r2
+                t2 = t2 - math.pi if t2 > t1 else t2 + math.pi
+            gap = abs(r1 - r2)
+            if 0.5 * width <= gap <= 1.6 * width and (best is None or i + j < best[0]):
+                best = (i + j, 0.5 * (t1 + t2), 0.5 * (r1 + r2), lines[i][2] + lines[j][2])
+    return best
+
+
+def hough_rope(scene, width: float, probabilistic: bool = False):
+    """(line_angle, line_offset, confidence) of a rope, or None."""
+    e = _edges(scene)
+    shape = e.shape
+    if not probabilistic:
+        out = cv2.HoughLinesWithAccumulator(e, 1, math.pi / 360, 80)
+        if out is None or len(out) == 0:
+            return None
+        # (rho, theta, votes) -> (theta, rho, votes), strongest first
+        lines = [(float(t), float(r), float(v)) for r, t, v in out.reshape(-1, 3)]
+    else:
+        segs = cv2.HoughLinesP(e, 1, math.pi / 360, 50, minLineLength=50, maxLineGap=10)
+        if segs is None or len(segs) == 0:
+            return None
+        segs = segs.reshape(-1, 4).astype(float)
+        length = np.hypot(segs[:, 2] - segs[:, 0], segs[:, 3] - segs[:, 1])
+        lines = []
+        for i in np.argsort(-length):
+            x1, y1, x2, y2 = segs[i]
+            th = math.atan2(x2 - x1, -(y2 - y1))  # normal direction (cos th, sin th)
+            if th < 0:
+                th += math.pi
+            if th >= math.pi:
+                th -= math.pi
+            rho = x1 * math.cos(th) + y1 * math.sin(th)
+            lines.append((th, rho, float(length[i])))
+    pr = _pair(lines, width)
+    if pr is not None:
+        _, th, rho, conf = pr
+    else:
+        th, rho, conf = lines[0]
+    a, off = line_from_normal(th, rho, shape)
+    return a, off, float(conf)

@@ -1,0 +1,112 @@
+"""Smoke test of the benchmark suite: `bench/run.py --quick` completes and every
+table is there with sane numbers (no thresholds on the results)."""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from seahough._data import shared_data_dir
+
+ROOT = Path(__file__).resolve().parents[1]
+RUN = ROOT / "bench" / "run.py"
+
+SECTIONS = {
+    "marker": "## Markers",
+    "fragment": "## Seabed fragments",
+    "pair": "## Frame pairs",
+    "rope": "## Ropes",
+    "negative": "## Negatives",
+    "real": "## Real sequences",
+}
+
+
+@pytest.fixture(scope="module")
+def quick_report(tmp_path_factory):
+    out = tmp_path_factory.mktemp("bench") / "report.md"
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), env.get("PYTHONPATH", "")])
+    proc = subprocess.run([sys.executable, str(RUN), "--quick", "--out", str(out)], cwd=ROOT,
+                          env=env, capture_output=True, text=True, timeout=240)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    text = out.read_text()
+    assert text.strip() == proc.stdout.strip()
+    return text
+
+
+def _section(text: str, title: str) -> str:
+    start = text.index(title)
+    nxt = text.find("\n## ", start + len(title))
+    return text[start: nxt if nxt >= 0 else len(text)]
+
+
+def _rows(section: str) -> list[list[str]]:
+    rows = []
+    for line in section.splitlines():
+        if line.startswith("|") and not line.startswith("|---"):
+            rows.append([c.strip() for c in line.strip().strip("|").split("|")])
+    return rows
+
+
+def _percentages(cells) -> list[float]:
+    vals = []
+    for c in cells:
+        for m in re.finditer(r"(-?\d+(?:\.\d+)?) %", c):
+            vals.append(float(m.group(1)) / 100.0)
+    return vals
+
+
+def test_quick_run_has_every_table_with_seahough(quick_report):
+    text = quick_report
+    assert "## Headline" in text
+    assert "Machine:" in text and "Command:" in text and "Date:" in text
+    for task, title in SECTIONS.items():
+        if task == "real" and shared_data_dir() is None:
+            assert "Skipped" in _section(text, title)
+            continue
+        sec = _section(text, title)
+        rows = _rows(sec)
+        assert len(rows) >= 3, f"{task}: no table"
+        methods = [r[0] for r in rows[1:]] + [r[2] for r in rows[1:] if len(r) > 2]
+        assert any(m.startswith("seahough") for m in methods), f"{task}: seahough missing"
+        for r in rows[1:]:
+            for v in _percentages(r):
+                assert 0.0 <= v <= 1.0, f"{task}: rate out of [0, 1] in {r}"
+
+
+def test_headline_rows_are_sane(quick_report):
+    rows = _rows(_section(quick_report, "## Headline"))
+    tasks = [r[0] for r in rows[1:]]
+    for prefix in ("marker (moderate)", "marker (hard)", "fragment", "pair (near)", "pair (free)",
+                   "rope", "negative"):
+        assert any(t.startswith(prefix) for t in tasks), prefix
+    for r in rows[1:]:
+        for v in _percentages(r[1:2] + r[5:6]):
+            assert 0.0 <= v <= 1.0
+        for cell in (r[3], r[7]):  # milliseconds: positive when present
+            if cell not in ("", "-"):
+                assert float(cell) > 0
+        m = re.search(r"AUC (\d\.\d+)", r[1])
+        if m:
+            assert 0.0 <= float(m.group(1)) <= 1.0
+
+
+def test_auc_rank_formula():
+    # in a subprocess: importing bench/run.py makes the process single-threaded
+    code = ("import run\n"
+            "assert run.auc([3, 4], [1, 2]) == 1.0\n"
+            "assert run.auc([1, 2], [3, 4]) == 0.0\n"
+            "assert run.auc([1, 1], [1, 1]) == 0.5\n"
+            "assert abs(run.auc([0.9, 0.4, 0.8], [0.1, 0.5]) - 5 / 6) < 1e-12\n"
+            "assert run.line_errors(179.5, 10.0, 0.5, -10.0) == (1.0, 0.0)\n")
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "bench"), str(ROOT / "src"),
+                                         env.get("PYTHONPATH", "")])
+    proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True,
+                          text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr[-2000:]
