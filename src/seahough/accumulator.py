@@ -16,6 +16,7 @@ import numpy as np
 
 from . import _kernels as K
 from .config import Config
+from ._validate import pair
 from .errors import ParameterError
 from .pattern import PatternFeatures
 from .segments import Segments
@@ -89,25 +90,38 @@ class AccumulatorPlanes:
         return (self.x[0] - dx / 2, self.x[-1] + dx / 2, self.y[-1] + dy / 2, self.y[0] - dy / 2)
 
 
-def _range(name, r, lo=None):
-    try:
-        a, b = (float(r[0]), float(r[1]))
-    except (TypeError, ValueError, IndexError):
-        raise ParameterError(f"{name}={r!r}: expected a (low, high) pair") from None
-    if not (math.isfinite(a) and math.isfinite(b)) or b < a:
-        raise ParameterError(f"{name}={r!r}: expected finite low <= high")
-    if lo is not None and a <= lo:
-        raise ParameterError(f"{name}={r!r}: values must be > {lo}")
-    return a, b
+#: Scales outside this range are refused (a pattern 100x smaller or larger
+#: than its image is a mistake, and would size the accumulator without bound).
+SCALE_LIMITS = (0.01, 100.0)
 
 
 def check_ranges(scale_range, angle_range):
-    """Validated ``(scale_range, angle_range)``; raises ParameterError."""
-    s = _range("scale_range", scale_range, lo=0.0)
-    a = _range("angle_range", angle_range)
+    """Validated ``(scale_range, angle_range)``; raises ParameterError.
+
+    Scales must lie in :data:`SCALE_LIMITS` and span at most 64x. The angle
+    range is moved by whole turns so that it starts in [0, 360) (so
+    ``(-30, 30)`` becomes ``(330, 390)``), and a span over 360 degrees is
+    taken as a full turn.
+
+    Examples
+    --------
+    >>> check_ranges((0.5, 2), (-30, 30))
+    ((0.5, 2.0), (330.0, 390.0))
+    """
+    s = pair("scale_range", scale_range)
+    lo, hi = SCALE_LIMITS
+    if not (lo <= s[0] and s[1] <= hi):
+        raise ParameterError(f"scale_range={scale_range!r}: scales must be in [{lo:g}, {hi:g}]")
     if s[1] / s[0] > 64:
         raise ParameterError(f"scale_range={scale_range!r}: spans more than 64x; split the search")
-    return s, a
+    a0, a1 = pair("angle_range", angle_range)
+    span = min(a1 - a0, 360.0)
+    a0 = math.fmod(a0, 360.0)
+    if a0 < 0:
+        a0 += 360.0
+    if a0 >= 360.0:
+        a0 = 0.0
+    return s, (a0, a0 + span)
 
 
 def make_bins(pf: PatternFeatures, scale_range, angle_range, region, config: Config) -> Bins:

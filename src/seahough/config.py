@@ -5,7 +5,13 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
+import numpy as np
+
+from ._validate import number
 from .errors import ParameterError
+
+#: Largest Config.local_window (working pixels).
+MAX_WINDOW = 1001
 
 VOTING_MODES = ("oriented", "points", "segments")
 
@@ -43,7 +49,7 @@ class Config:
         rocks, the lit centre of a strobe) and faint objects on smooth sand
         keep theirs.
     local_window : int
-        Side of that window, working pixels.
+        Side of that window, working pixels (3 to 1001; odd or even).
     equalize : bool
         Apply CLAHE (local contrast equalisation) before the gradients; helps
         with uneven strobe light and haze.
@@ -63,8 +69,9 @@ class Config:
         direction. ``"segments"``: segment pairs solved directly with
         equation 5. See ``docs/method.md`` for the measurements.
     translation_bin, angle_bin, scale_step : float or None
-        Accumulator bin sizes (working px, degrees, log-scale step). ``None``
-        derives them from the pattern's size.
+        Accumulator bin sizes (working px, at least 0.25; degrees, at least
+        0.1; log-scale step, at least 0.001). ``None`` derives them from the
+        pattern's size.
     angle_tolerance : float
         Largest difference (degrees) between an image edge direction and the
         rotated pattern edge direction for a pair to vote when the rotation is
@@ -105,39 +112,39 @@ class Config:
     max_pixels: int = 200_000_000
 
     def __post_init__(self) -> None:
-        def bad(name, why):
-            raise ParameterError(f"Config.{name}={getattr(self, name)!r}: {why}")
+        def check(name, **limits):
+            try:
+                number(f"Config.{name}", getattr(self, name), **limits)
+            except ParameterError as e:
+                raise ParameterError(str(e)) from None
 
-        if self.downscale is not None and not (0 < self.downscale <= 1):
-            bad("downscale", "must be in (0, 1] or None")
-        for name in ("target_size", "n_keypoints", "n_pattern_points", "n_verify_points",
-                     "max_segments", "n_candidates", "max_pixels"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-                bad(name, "must be a positive integer")
-        if isinstance(self.local_window, bool) or not isinstance(self.local_window, int) \
-                or self.local_window < 3:
-            bad("local_window", "must be an integer >= 3")
-        if self.target_size < 32:
-            bad("target_size", "must be at least 32")
-        if self.n_pattern_points < 8:
-            bad("n_pattern_points", "must be at least 8")
-        if not (1 <= self.segment_steps <= 20):
-            bad("segment_steps", "must be between 1 and 20")
-        for name in ("min_pattern_size", "match_radius"):
-            if not (getattr(self, name) > 0):
-                bad(name, "must be > 0")
-        if not (self.min_gradient >= 0):
-            bad("min_gradient", "must be >= 0")
+        if self.downscale is not None:
+            check("downscale", lo=0.0, lo_open=True, hi=1.0)
+        for name in ("n_keypoints", "n_verify_points", "max_segments", "max_pixels"):
+            check(name, lo=1, integer=True)
+        check("target_size", lo=32, hi=100_000, integer=True)
+        check("n_pattern_points", lo=8, hi=100_000, integer=True)
+        check("n_candidates", lo=1, hi=1000, integer=True)
+        check("local_window", lo=3, hi=MAX_WINDOW, integer=True)
+        check("segment_steps", lo=1, hi=20, integer=True)
+        check("min_pattern_size", lo=1.0, hi=10_000.0)
+        check("match_radius", lo=0.0, lo_open=True, hi=100.0)
+        check("min_gradient", lo=0.0)
         for name in ("segment_angle_tol", "angle_tolerance"):
-            if not (0 < getattr(self, name) <= 90):
-                bad(name, "must be in (0, 90] degrees")
+            check(name, lo=0.0, lo_open=True, hi=90.0)
+        for name in ("local_contrast", "equalize", "refine"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise ParameterError(f"Config.{name}={getattr(self, name)!r}: must be True or False")
         if self.voting not in VOTING_MODES:
-            bad("voting", f"must be one of {', '.join(VOTING_MODES)}")
-        for name in ("translation_bin", "angle_bin", "scale_step"):
-            v = getattr(self, name)
-            if v is not None and not (v > 0):
-                bad(name, "must be > 0 or None")
+            raise ParameterError(f"Config.voting={self.voting!r}: must be one of "
+                                 f"{', '.join(VOTING_MODES)}")
+        # bins finer than these would size the accumulator without bound
+        if self.translation_bin is not None:
+            check("translation_bin", lo=0.25, hi=1000.0)
+        if self.angle_bin is not None:
+            check("angle_bin", lo=0.1, hi=360.0)
+        if self.scale_step is not None:
+            check("scale_step", lo=0.001, hi=1.0)
 
     def replace(self, **changes) -> "Config":
         """A copy with some fields changed (validated again)."""

@@ -11,6 +11,7 @@ import numpy as np
 
 from .accumulator import AccumulatorPlanes, Bins, accumulate, check_ranges, make_bins
 from .config import Config
+from ._validate import number
 from .errors import ParameterError
 from .features import Features, extract_features
 from .geometry import apply_matrix, pose_to_matrix
@@ -95,9 +96,19 @@ class Detection:
         return d
 
 
+#: Why a search ended early with no detections ("" when it ran to the end).
+SEARCH_NOTES = ("", "no edges", "pattern larger than the image",
+                "search_region is outside the image")
+
+
 @dataclass
 class SearchResult:
-    """Everything one search produced: the detections and how it got there."""
+    """Everything one search produced: the detections and how it got there.
+
+    ``note`` says why a search stopped before voting (its detections are
+    then empty): one of :data:`SEARCH_NOTES`. ``planes`` and ``features``
+    may then be None.
+    """
 
     detections: list
     planes: AccumulatorPlanes | None
@@ -192,14 +203,9 @@ class Detector:
         self.config = config or Config()
         if not isinstance(self.config, Config):
             raise ParameterError("config must be a seahough.Config")
-        if isinstance(max_results, bool) or not isinstance(max_results, (int, np.integer)) or max_results < 1:
-            raise ParameterError(f"max_results={max_results!r}: must be a positive integer")
-        for name, v in (("min_score", min_score), ("min_confidence", min_confidence)):
-            if not (isinstance(v, (int, float)) and 0.0 <= v <= 1.0):
-                raise ParameterError(f"{name}={v!r}: must be between 0 and 1")
-        self.max_results = int(max_results)
-        self.min_score = float(min_score)
-        self.min_confidence = float(min_confidence)
+        self.max_results = int(number("max_results", max_results, lo=1, integer=True))
+        self.min_score = number("min_score", min_score, lo=0.0, hi=1.0)
+        self.min_confidence = number("min_confidence", min_confidence, lo=0.0, hi=1.0)
         if search_region is not None:
             try:
                 sr = tuple(float(v) for v in search_region)
@@ -232,6 +238,11 @@ class Detector:
         gray = to_gray(image, max_pixels=cfg.max_pixels)
         p = self.pattern
         s0, s1 = self.scale_range
+        # a pattern that cannot fit the image at any searched scale is not there;
+        # larger scales than that are not searched (they would only size the
+        # accumulator)
+        fit = 2.0 * math.hypot(*gray.shape) / p.extent
+        s1 = min(s1, max(fit, s0))
         factor = features.gradients.factor if features is not None else choose_factor(
             gray.shape, cfg, p.extent, s0)
         if features is None:
@@ -240,17 +251,27 @@ class Detector:
         timings["features"] = t1 - t0
         if len(features.segments) < 4:
             return SearchResult([], None, features, factor, [], timings, note="no edges")
+        if s0 > fit:
+            return SearchResult([], None, features, factor, [], timings,
+                                note="pattern larger than the image")
         pf = p.features(factor, cfg)
         g = features.gradients
         h, w = features.shape
         if self.search_region is not None:
+            # the origin cannot lie farther out than the pattern reaches
+            m = p.reach * s1 * factor + 2.0
             x0, y0 = g.to_work(self.search_region[0], self.search_region[1])
             x1, y1 = g.to_work(self.search_region[2], self.search_region[3])
+            x0, y0 = max(x0, -m), max(y0, -m)
+            x1, y1 = min(x1, w - 1 + m), min(y1, h - 1 + m)
+            if x1 <= x0 or y1 <= y0:
+                return SearchResult([], None, features, factor, [], timings,
+                                    note="search_region is outside the image")
         else:
             m = 0.1 * p.extent * s1 * factor
             x0, y0, x1, y1 = -m, -m, w - 1 + m, h - 1 + m
         region = (float(x0), float(y0), float(x1), float(y1))
-        bins = make_bins(pf, self.scale_range, self.angle_range, region, cfg)
+        bins = make_bins(pf, (s0, s1), self.angle_range, region, cfg)
         best_val, best_k, best_d, proj = accumulate(pf, features.segments, bins, p.either)
         t2 = time.perf_counter()
         timings["voting"] = t2 - t1

@@ -44,6 +44,20 @@ def pose_to_matrix(x: float, y: float, scale: float, angle_deg: float,
     return np.hstack([a, t[:, None]])
 
 
+def wrap360(angle_deg: float) -> float:
+    """An angle in degrees brought into [0, 360).
+
+    ``x % 360`` alone gives 360.0 for a tiny negative ``x`` (rounding).
+
+    Examples
+    --------
+    >>> wrap360(-1e-20), wrap360(370.0)
+    (0.0, 10.0)
+    """
+    a = float(angle_deg) % 360.0
+    return 0.0 if a >= 360.0 else a
+
+
 def matrix_to_pose(matrix: np.ndarray, origin: tuple[float, float] = (0.0, 0.0)
                    ) -> tuple[float, float, float, float]:
     """Inverse of :func:`pose_to_matrix` for a similarity matrix.
@@ -53,7 +67,7 @@ def matrix_to_pose(matrix: np.ndarray, origin: tuple[float, float] = (0.0, 0.0)
     m = np.asarray(matrix, dtype=float)
     a, b = 0.5 * (m[0, 0] + m[1, 1]), 0.5 * (m[0, 1] - m[1, 0])
     scale = math.hypot(a, b)
-    angle = math.degrees(math.atan2(b, a)) % 360.0
+    angle = wrap360(math.degrees(math.atan2(b, a)))
     x, y = m[:, :2] @ np.asarray(origin, dtype=float) + m[:, 2]
     return float(x), float(y), float(scale), float(angle)
 
@@ -102,7 +116,7 @@ def solve_segment_pair(p1, p2, q1, q2) -> tuple[float, float, float, float]:
     rc = (a * c + b * d) / n
     rs = (b * c - a * d) / n
     rho = math.hypot(rc, rs)
-    phi = math.degrees(math.atan2(rs, rc)) % 360.0
+    phi = wrap360(math.degrees(math.atan2(rs, rc)))
     dx = q1[0] - (rc * p1[0] + rs * p1[1])
     dy = q1[1] - (-rs * p1[0] + rc * p1[1])
     return float(dx), float(dy), float(rho), float(phi)

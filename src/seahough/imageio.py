@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import os
+import sys
+import tempfile
+import threading
 from pathlib import Path
 
 import cv2
@@ -41,6 +44,52 @@ def _check_complete(path: Path, data: bytes) -> None:
         raise ImageReadError(f"{path}: truncated PNG (no IEND chunk)")
 
 
+class _DecoderMessages:
+    """Catch what the C decoders (libjpeg, libpng) print on stderr.
+
+    They report damaged data there, not to OpenCV: a JPEG with corrupt
+    entropy-coded data decodes "successfully" into garbage and a warning.
+    File descriptor 2 is pointed at a temporary file while decoding (one
+    decode at a time), and the text is kept in ``text`` instead of reaching
+    the user's terminal as stray lines.
+    """
+
+    _lock = threading.Lock()
+
+    def __enter__(self):
+        self.text = ""
+        self._saved = None
+        self._lock.acquire()
+        try:
+            sys.stderr.flush()
+            self._tmp = tempfile.TemporaryFile()
+            self._saved = os.dup(2)
+            os.dup2(self._tmp.fileno(), 2)
+        except (OSError, ValueError, AttributeError):  # no usable fd 2: decode as is
+            self._saved = None
+        return self
+
+    def __exit__(self, *exc):
+        try:
+            if self._saved is not None:
+                os.dup2(self._saved, 2)
+                os.close(self._saved)
+                self._tmp.seek(0)
+                self.text = self._tmp.read(4096).decode("utf-8", "replace")
+                self._tmp.close()
+        finally:
+            self._lock.release()
+        return False
+
+
+def _first_line(text: str) -> str:
+    for line in text.splitlines():
+        line = line.strip()
+        if line:
+            return line[:200]
+    return ""
+
+
 def read_image(path: str | os.PathLike, *, max_pixels: int = 200_000_000) -> np.ndarray:
     """Read an image file as OpenCV does (any depth, grey/BGR/BGRA).
 
@@ -64,9 +113,13 @@ def read_image(path: str | os.PathLike, *, max_pixels: int = 200_000_000) -> np.
         raise ImageReadError(f"{p}: empty file")
     _check_header(p, max_pixels)
     _check_complete(p, data)
-    img = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+    with _DecoderMessages() as messages:
+        img = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
     if img is None:
-        raise ImageReadError(f"{p}: not an image OpenCV can decode")
+        why = _first_line(messages.text)
+        raise ImageReadError(f"{p}: not an image OpenCV can decode" + (f" ({why})" if why else ""))
+    if "Corrupt JPEG data" in messages.text or "Premature end of JPEG" in messages.text:
+        raise ImageReadError(f"{p}: corrupt JPEG data ({_first_line(messages.text)})")
     if img.size == 0:
         raise ImageSizeError(f"{p}: image has no pixels")
     return img
@@ -112,6 +165,8 @@ def to_gray(image, *, name: str = "image", max_pixels: int = 200_000_000,
     if a.dtype.kind == "f":
         if not np.isfinite(a).all():
             raise ImageValueError(f"{label}: contains NaN or infinite values")
+        if a.dtype.itemsize > 4 and np.abs(a).max(initial=0) > np.finfo(np.float32).max:
+            raise ImageValueError(f"{label}: values beyond +-3.4e38 (float32 range)")
         a = a.astype(np.float32)
         if a.max(initial=0) <= 1.0 and a.min(initial=0) >= 0.0:
             a = a * 255.0

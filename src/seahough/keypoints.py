@@ -91,7 +91,7 @@ def local_contrast(edges: EdgePoints, magnitude: np.ndarray, window: int) -> np.
     >>> bool(c[e.x < 25].mean() > 0.1 * c[e.x > 25].mean())  # the faint edge keeps weight
     True
     """
-    k = int(window) | 1
+    k = min(int(window), max(magnitude.shape)) | 1  # wider windows only cost time
     mean = cv2.blur(magnitude, (k, k), borderType=cv2.BORDER_REFLECT)
     floor = np.float32(max(cv2.mean(magnitude)[0], 1e-3))
     return edges.magnitude / (mean[edges.iy, edges.ix] + floor)

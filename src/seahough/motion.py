@@ -9,9 +9,10 @@ import numpy as np
 
 from .config import Config
 from .detector import Detector
-from .errors import ParameterError
+from .errors import ParameterError, PatternError
 from .geometry import pose_to_matrix
-from .imageio import to_gray
+from ._validate import number
+from .imageio import MIN_SIDE, to_gray
 from .pattern import Pattern
 
 
@@ -77,10 +78,11 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
         Below these the motion is reported as unknown (None).
     """
     cfg = config or MOTION_CONFIG
+    if not isinstance(cfg, Config):
+        raise ParameterError("config must be a seahough.Config")
+    _check_thresholds(max_shift, min_confidence, min_score)
     prev = to_gray(previous, name="previous frame", max_pixels=cfg.max_pixels)
     cur = to_gray(current, name="current frame", max_pixels=cfg.max_pixels)
-    if not (0 < max_shift <= 1.5):
-        raise ParameterError(f"max_shift={max_shift!r}: must be in (0, 1.5]")
     if prev.shape != cur.shape:
         raise ParameterError(f"frames differ in size: previous {prev.shape[1]}x{prev.shape[0]}, "
                              f"current {cur.shape[1]}x{cur.shape[0]}")
@@ -88,7 +90,10 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
     b1, b2 = content_box(prev), content_box(cur)
     x0, y0 = max(b1[0], b2[0]), max(b1[1], b2[1])
     x1, y1 = min(b1[2], b2[2]), min(b1[3], b2[3])
-    pattern = Pattern.from_frame(prev[y0:y1, x0:x1], config=cfg)
+    try:
+        pattern = Pattern.from_frame(prev[y0:y1, x0:x1], config=cfg)
+    except PatternError as e:
+        raise PatternError(f"previous frame: {e}") from None
     m = motion_from_pattern(pattern, cur[y0:y1, x0:x1], scale_range, angle_range,
                             max_shift=max_shift, min_confidence=min_confidence,
                             min_score=min_score, config=cfg)
@@ -107,6 +112,7 @@ def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
                         min_score=0.15, config: Config | None = None, features=None):
     """:func:`estimate_motion` with the previous frame already made a pattern."""
     cfg = config or MOTION_CONFIG
+    _check_thresholds(max_shift, min_confidence, min_score)
     cur = to_gray(current, name="current frame", max_pixels=cfg.max_pixels)
     h, w = cur.shape
     ph, pw = pattern.image.shape
@@ -127,6 +133,12 @@ def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
     overlap = _overlap(m, w, h)
     angle = (d.angle + 180.0) % 360.0 - 180.0
     return Motion(m, d.x - ox, d.y - oy, angle, d.scale, d.confidence, d.score, overlap)
+
+
+def _check_thresholds(max_shift, min_confidence, min_score) -> None:
+    number("max_shift", max_shift, lo=0.0, lo_open=True, hi=1.5)
+    number("min_confidence", min_confidence, lo=0.0, hi=1.0)
+    number("min_score", min_score, lo=0.0, hi=1.0)
 
 
 def content_box(gray: np.ndarray, margin: int = 2) -> tuple[int, int, int, int]:
@@ -152,8 +164,9 @@ def content_box(gray: np.ndarray, margin: int = 2) -> tuple[int, int, int, int]:
     left = depth(gray[:, i] for i in range(lim_x))
     right = depth(gray[:, w - 1 - i] for i in range(lim_x))
     box = (left + margin, top + margin, w - right - margin, h - bottom - margin)
-    if box[2] - box[0] < w // 2 or box[3] - box[1] < h // 2:
-        return (0, 0, w, h)
+    small = max(w // 2, MIN_SIDE), max(h // 2, MIN_SIDE)
+    if box[2] - box[0] < small[0] or box[3] - box[1] < small[1]:
+        return (0, 0, w, h)  # (also frames too small to lose a margin)
     return box
 
 

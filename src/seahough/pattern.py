@@ -16,11 +16,17 @@ import numpy as np
 
 from . import _kernels as K
 from .config import Config
+from ._validate import number
 from .errors import ParameterError, PatternError
 from .features import extract_features
 from .imageio import to_gray
 
 POLARITIES = ("bright", "dark", "either")
+#: Primitive shapes are drawn at most this many pixels a side.
+MAX_SHAPE_SIDE = 8192
+#: The origin may lie outside the pattern image, by at most this many times
+#: the image's longer side.
+MAX_ORIGIN_OUTSIDE = 10
 _IMAGE_POLARITIES = {"same": "bright", "inverted": "dark", "either": "either",
                      "bright": "bright", "dark": "dark"}
 
@@ -51,13 +57,9 @@ class PatternFeatures:
 
 
 def _check_positive(**kw):
+    """Sizes of a primitive shape: positive and at most MAX_SHAPE_SIDE px."""
     for k, v in kw.items():
-        try:
-            ok = math.isfinite(float(v)) and float(v) > 0
-        except (TypeError, ValueError):
-            ok = False
-        if not ok:
-            raise ParameterError(f"{k}={v!r}: must be a positive number")
+        number(k, v, lo=0.0, lo_open=True, hi=MAX_SHAPE_SIDE)
 
 
 def _check_polarity(polarity, allowed=POLARITIES):
@@ -117,8 +119,11 @@ class Pattern:
             origin = (float(origin[0]), float(origin[1]))
         except (TypeError, ValueError, IndexError):
             raise ParameterError(f"origin={origin!r}: must be an (x, y) pair") from None
-        if not all(math.isfinite(v) for v in origin):
-            raise ParameterError(f"origin={origin!r}: must be finite")
+        lim = MAX_ORIGIN_OUTSIDE * max(h, w)
+        if not all(math.isfinite(v) for v in origin) or not (
+                -lim <= origin[0] <= w - 1 + lim and -lim <= origin[1] <= h - 1 + lim):
+            raise ParameterError(f"origin={origin!r}: must be finite and within "
+                                 f"{MAX_ORIGIN_OUTSIDE} pattern sizes of the {w}x{h} pattern image")
         self.origin = origin
         _check_polarity(polarity)
         self.polarity = polarity
@@ -166,6 +171,10 @@ class Pattern:
 
     @staticmethod
     def _canvas(w, h, margin):
+        number("margin", margin, lo=0.0, hi=1000.0)
+        if max(w, h) > MAX_SHAPE_SIDE:
+            raise ParameterError(f"shape of {w:g}x{h:g} px: at most {MAX_SHAPE_SIDE} px a side "
+                                 "(draw it smaller and search over larger scales)")
         m = int(math.ceil(margin))
         cw, ch = int(math.ceil(w)) + 2 * m + 1, int(math.ceil(h)) + 2 * m + 1
         return np.full((ch, cw), 30, np.uint8), m
@@ -277,6 +286,12 @@ class Pattern:
         pts = np.vstack(self.outline)
         span = pts.max(axis=0) - pts.min(axis=0)
         return float(max(np.hypot(*span), 1.0))
+
+    @functools.cached_property
+    def reach(self) -> float:
+        """Largest distance (pattern pixels) from the origin to the outline."""
+        pts = np.vstack(self.outline) - np.asarray(self.origin)
+        return float(max(np.sqrt((pts ** 2).sum(axis=1)).max(), 1.0))
 
     @property
     def size(self) -> tuple[int, int]:

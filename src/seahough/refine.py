@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _kernels as K
+from .geometry import wrap360
 from .keypoints import EdgePoints
 
 
@@ -34,7 +35,7 @@ class Pose:
     @property
     def angle(self) -> float:
         """Degrees in [0, 360)."""
-        return math.degrees(math.atan2(self.b, self.a)) % 360.0
+        return wrap360(math.degrees(math.atan2(self.b, self.a)))
 
     @classmethod
     def from_params(cls, tx, ty, scale, angle_rad) -> "Pose":

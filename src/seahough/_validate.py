@@ -1,0 +1,60 @@
+"""Parameter checks shared by the public entry points.
+
+Every check raises :class:`~seahough.errors.ParameterError` with a message
+that names the parameter, its value and what it must be.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+
+from .errors import ParameterError
+
+
+def number(name: str, value, *, lo: float | None = None, hi: float | None = None,
+           lo_open: bool = False, hi_open: bool = False, integer: bool = False) -> float:
+    """``value`` as a finite float (or int) within [lo, hi]; ParameterError if not.
+
+    Python and numpy numbers are accepted; bools, strings and None are not.
+
+    Examples
+    --------
+    >>> number("min_score", 0.5, lo=0, hi=1)
+    0.5
+    """
+    kind = "an integer" if integer else "a number"
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ParameterError(f"{name}={value!r}: must be {kind}")
+    if integer and not isinstance(value, numbers.Integral):
+        raise ParameterError(f"{name}={value!r}: must be {kind}")
+    v = int(value) if integer else float(value)
+    if not math.isfinite(v):
+        raise ParameterError(f"{name}={value!r}: must be finite")
+    too_low = lo is not None and (v <= lo if lo_open else v < lo)
+    too_high = hi is not None and (v >= hi if hi_open else v > hi)
+    if too_low or too_high:
+        left = "(" if lo_open else "["
+        right = ")" if hi_open else "]"
+        lo_s = "-inf" if lo is None else f"{lo:g}"
+        hi_s = "inf" if hi is None else f"{hi:g}"
+        raise ParameterError(f"{name}={value!r}: must be in {left}{lo_s}, {hi_s}{right}")
+    return v
+
+
+def pair(name: str, value) -> tuple[float, float]:
+    """A (low, high) pair of finite numbers with low <= high."""
+    if isinstance(value, (str, bytes)):
+        raise ParameterError(f"{name}={value!r}: expected a (low, high) pair")
+    try:
+        items = list(value)
+    except TypeError:
+        raise ParameterError(f"{name}={value!r}: expected a (low, high) pair") from None
+    if len(items) != 2:
+        raise ParameterError(f"{name}={value!r}: expected a (low, high) pair, "
+                             f"got {len(items)} values")
+    a = number(f"{name}[0]", items[0])
+    b = number(f"{name}[1]", items[1])
+    if b < a:
+        raise ParameterError(f"{name}={value!r}: low must be <= high")
+    return a, b
