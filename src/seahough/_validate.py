@@ -34,11 +34,13 @@ def number(name: str, value, *, lo: float | None = None, hi: float | None = None
     too_low = lo is not None and (v <= lo if lo_open else v < lo)
     too_high = hi is not None and (v >= hi if hi_open else v > hi)
     if too_low or too_high:
-        left = "(" if lo_open else "["
-        right = ")" if hi_open else "]"
-        lo_s = "-inf" if lo is None else f"{lo:g}"
-        hi_s = "inf" if hi is None else f"{hi:g}"
-        raise ParameterError(f"{name}={value!r}: must be in {left}{lo_s}, {hi_s}{right}")
+        if hi is None:
+            want = f"{'>' if lo_open else '>='} {lo:g}"
+        elif lo is None:
+            want = f"{'<' if hi_open else '<='} {hi:g}"
+        else:
+            want = f"in {'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
+        raise ParameterError(f"{name}={value!r}: must be {want}")
     return v
 
 

@@ -278,6 +278,7 @@ class Detector:
         planes = self._planes(bins, best_val, best_k, best_d, proj, g)
         self._points = np.stack([pf.vx, pf.vy], 1).astype(float)
         self._probe = self._points[:: max(1, pf.vx.size // 64)]
+        self._centre = tuple(float(v) for v in self._points.mean(axis=0))
         hull = cv2.convexHull(np.vstack(p.outline).astype(np.float32)).reshape(-1, 2)
         self._footprint = hull.astype(float) - np.asarray(p.origin)  # pattern px, from origin
         self._close_px = max(2.0 * bins.step, 3.0)
@@ -405,10 +406,12 @@ class Detector:
                                score_radius=score_r)
                     if f.score > best:
                         best, start = f.score, f.pose
-            if known:  # only the translation moves: refine and score with all points at once
-                fit = refine(start, pf.vx, pf.vy, pf.vangle, features.edges, features.index,
+            if known:  # only the translation moves: refine on the subset, score with all
+                fit = refine(start, sx, sy, sa, features.edges, features.index,
                              radii=radii if cfg.refine else (), angle_tol=tol, either=p.either,
-                             fix_scale=True, fix_angle=True, score_radius=score_r, iterations=8)
+                             fix_scale=True, fix_angle=True, score_radius=score_r, iterations=6)
+                fit = refine(fit.pose, pf.vx, pf.vy, pf.vangle, features.edges, features.index,
+                             radii=(), angle_tol=tol, either=p.either, score_radius=score_r)
             else:
                 starts = [start]
                 if not (rank < self._full_treatment and len(ks) > 1) and len(ks) > 1:
@@ -465,9 +468,18 @@ class Detector:
         qx, qy = pose.map(fp[:, 0], fp[:, 1])
         return np.stack([qx, qy], 1).astype(np.float32)
 
+    def _centre_gap(self, a: Pose, b: Pose) -> float:
+        """Distance between the pattern points' centre placed by ``a`` and by ``b``."""
+        cx, cy = self._centre
+        dx = (a.tx - b.tx) + (a.a - b.a) * cx + (a.b - b.b) * cy
+        dy = (a.ty - b.ty) - (a.b - b.b) * cx + (a.a - b.a) * cy
+        return math.hypot(dx, dy)
+
     def _close(self, a: Pose, b: Pose) -> bool:
         """Practically the same pose: the pattern's points move less than
         ~2 working pixels between the two."""
+        if self._centre_gap(a, b) >= self._close_px:
+            return False
         pts = self._probe
         ax, ay = a.map(pts[:, 0], pts[:, 1])
         bx, by = b.map(pts[:, 0], pts[:, 1])
@@ -477,6 +489,9 @@ class Detector:
         """The same answer in another guise: the pattern's edge points placed
         by ``a`` and by ``b`` coincide as sets (a symmetric shape turned onto
         itself, e.g. a rectangle by 180 degrees)."""
+        # point sets that coincide have (nearly) the same centre: a cheap test first
+        if self._centre_gap(a, b) > 3.0 * self._close_px:
+            return False
         ax, ay = a.map(self._probe[:, 0], self._probe[:, 1])
         bx, by = b.map(self._points[:, 0], self._points[:, 1])
         d = np.hypot(ax[:, None] - bx[None, :], ay[:, None] - by[None, :]).min(axis=1)
