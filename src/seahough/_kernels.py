@@ -389,25 +389,38 @@ def match_points(px, py, pang, a, b, tx, ty, ex, ey, eang, index, radius, ang_to
         want = pang[i] - phi
         bestd = r2 + 1e-9
         best = -1
-        for yy in range(max(cy - r, 0), min(cy + r + 1, h)):
-            for xx in range(max(cx - r, 0), min(cx + r + 1, w)):
-                j = index[yy, xx]
-                if j < 0:
+        # rings of pixels around (cx, cy), nearest first. An edge point lies
+        # within half a pixel of its pixel and (x, y) within half a pixel of
+        # (cx, cy), so everything in ring k and beyond is at least k - 1 away:
+        # once a match closer than that is found, the outer rings cannot win.
+        for k in range(r + 1):
+            if k >= 1 and bestd < (k - 1) * (k - 1):
+                break
+            for yy in range(cy - k, cy + k + 1):
+                if yy < 0 or yy >= h:
                     continue
-                da = _wrap_pi(eang[j] - want)
-                if either:
-                    if da > 0.5 * math.pi:
-                        da -= math.pi
-                    elif da < -0.5 * math.pi:
-                        da += math.pi
-                if abs(da) > ang_tol:
-                    continue
-                ddx = ex[j] - x
-                ddy = ey[j] - y
-                d2 = ddx * ddx + ddy * ddy
-                if d2 < bestd:
-                    bestd = d2
-                    best = j
+                edge_row = yy == cy - k or yy == cy + k
+                step = 1 if edge_row else 2 * k
+                for xx in range(cx - k, cx + k + 1, max(step, 1)):
+                    if xx < 0 or xx >= w:
+                        continue
+                    j = index[yy, xx]
+                    if j < 0:
+                        continue
+                    da = _wrap_pi(eang[j] - want)
+                    if either:
+                        if da > 0.5 * math.pi:
+                            da -= math.pi
+                        elif da < -0.5 * math.pi:
+                            da += math.pi
+                    if abs(da) > ang_tol:
+                        continue
+                    ddx = ex[j] - x
+                    ddy = ey[j] - y
+                    d2 = ddx * ddx + ddy * ddy
+                    if d2 < bestd:
+                        bestd = d2
+                        best = j
         if best >= 0:
             out[i] = best
             dist[i] = math.sqrt(bestd)
