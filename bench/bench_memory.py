@@ -146,6 +146,11 @@ def main(argv=None) -> int:
     print(f"\nRSS after warm-up {base['rss']:.1f} MiB, at the end {end['rss']:.1f} MiB: "
           f"{growth:+.1f} MiB over {n} frames ({1000 * growth / n:+.2f} MiB per 1000 frames); "
           f"peak RSS {end['peak']:.1f} MiB (after warm-up: {base['peak']:.1f}).")
+    if len(rows) > 2:  # a step right after the baseline (allocator pools, tracing) is not a leak
+        first = rows[1]
+        late = end["rss"] - first["rss"]
+        print(f"From frame {first['frames']} to {end['frames']}: {late:+.1f} MiB "
+              f"({1000 * late / max(end['frames'] - first['frames'], 1):+.2f} MiB per 1000 frames).")
     if trace:
         print(f"Python heap (tracemalloc) at the end {mb(end['traced'])} MiB, peak "
               f"{mb(end['traced_peak'])} MiB; live objects {base['objects']} -> {end['objects']}.")
