@@ -1055,7 +1055,7 @@ def main(argv=None) -> dict:
              f"Date: {datetime.date.today().isoformat()}  ",
              f"Machine: {machine()}  ",
              f"Run single-threaded (cv2.setNumThreads(1), NUMBA_NUM_THREADS=1) on a shared 2-core "
-             f"machine that other jobs were using: timings are noisy. Whole run: {total:.0f} s "
+             f"machine (other jobs may share it: timings can be noisy). Whole run: {total:.0f} s "
              f"(" + ", ".join(f"{t} {timing[t]:.0f} s" for t in timing) + "). Numba compile time "
              "excluded (a warm-up call first). Peer settings: bench/peers.py and the section at "
              "the end.", "",

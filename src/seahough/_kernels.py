@@ -32,13 +32,19 @@ def edge_points(mag, gx, gy, phase, floor):
     """Non-maximum suppression across the edge, with sub-pixel position.
 
     ``phase`` is the gradient direction image (radians, [0, 2 pi)).
-    Returns ``(x, y, angle, magnitude, ix, iy)`` of every pixel whose gradient
+    Returns ``(x, y, angle, magnitude, ix, iy, index)`` of every pixel whose gradient
     magnitude is at least ``floor`` and is a local maximum along its gradient
     direction (quantised to 4 directions, as Canny does). The sub-pixel offset
     along that direction comes from a parabola through the three magnitudes.
+    ``index`` holds each point's id at its pixel (-1 elsewhere).
     """
     h, w = mag.shape
-    n = max((h - 2) * (w - 2), 0)  # at most one point a pixel; trimmed below
+    n = 0  # at most one point per pixel over the floor (trimmed below)
+    for y in range(1, h - 1):
+        for x in range(1, w - 1):
+            if mag[y, x] >= floor:
+                n += 1
+    index = np.full((h, w), -1, np.int32)
     xs = np.empty(n, np.float32)
     ys = np.empty(n, np.float32)
     an = np.empty(n, np.float32)
@@ -82,9 +88,10 @@ def edge_points(mag, gx, gy, phase, floor):
             mg[k] = m
             ix[k] = x
             iy[k] = y
+            index[y, x] = k
             k += 1
     return (xs[:k].copy(), ys[:k].copy(), an[:k].copy(), mg[:k].copy(), ix[:k].copy(),
-            iy[:k].copy())
+            iy[:k].copy(), index)
 
 
 @njit(cache=True)
@@ -345,18 +352,23 @@ def vote(px, py, pang, pw, p2x, p2y,
                         if stamp[k, iy, ix] != tag:
                             stamp[k, iy, ix] = tag
                             acc[k, iy, ix] += wi
-        # reduce the slice: 2x2 translation blocks
+        # reduce the slice: 2x2 translation blocks (written without branches
+        # so that the compiler vectorises the rows)
         for k in range(n_rho):
-            top = 0.0
+            top = np.float32(0.0)
             for yy in range(nh - 1):
+                a0 = acc[k, yy]
+                a1 = acc[k, yy + 1]
+                bv = best_val[yy]
+                bk = best_k[yy]
+                bd = best_d[yy]
                 for xx in range(nw - 1):
-                    v = acc[k, yy, xx] + acc[k, yy, xx + 1] + acc[k, yy + 1, xx] + acc[k, yy + 1, xx + 1]
-                    if v > best_val[yy, xx]:
-                        best_val[yy, xx] = v
-                        best_k[yy, xx] = k
-                        best_d[yy, xx] = d
-                    if v > top:
-                        top = v
+                    v = a0[xx] + a0[xx + 1] + a1[xx] + a1[xx + 1]
+                    up = v > bv[xx]
+                    bv[xx] = v if up else bv[xx]
+                    bk[xx] = k if up else bk[xx]
+                    bd[xx] = d if up else bd[xx]
+                    top = max(top, v)
             if top > proj_sr[k, d]:
                 proj_sr[k, d] = top
 

@@ -21,7 +21,7 @@ def _check_header(path: Path, max_pixels: int) -> None:
     """Refuse a file whose header claims more than ``max_pixels`` pixels."""
     try:
         from PIL import Image
-    except ImportError:  # pragma: no cover - pillow comes with matplotlib
+    except ImportError:  # pragma: no cover - pillow is a dependency
         return
     Image.MAX_IMAGE_PIXELS = None  # we apply our own limit below
     try:

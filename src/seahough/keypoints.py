@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
@@ -27,6 +27,7 @@ class EdgePoints:
     ix: np.ndarray
     iy: np.ndarray
     shape: tuple[int, int]
+    index: np.ndarray | None = field(default=None, repr=False)
 
     def __len__(self) -> int:
         return int(self.x.shape[0])
@@ -34,7 +35,11 @@ class EdgePoints:
     def index_map(self, ids: np.ndarray | None = None) -> np.ndarray:
         """int32 image holding each edge point's id at its pixel, -1 elsewhere.
 
-        With ``ids``, only those points are entered."""
+        With ``ids``, only those points are entered. (Without, the map that
+        :func:`find_edge_points` made along the way, when there is one: do
+        not write into it.)"""
+        if ids is None and self.index is not None:
+            return self.index
         m = np.full(self.shape, -1, np.int32)
         if ids is None:
             ids = np.arange(len(self), dtype=np.int32)
@@ -54,10 +59,10 @@ def find_edge_points(grad: Gradients, min_gradient: float) -> EdgePoints:
     (True, 26)
     """
     phase = cv2.phase(grad.gx, grad.gy)  # [0, 2 pi), vectorised (about 0.3 deg accurate)
-    x, y, a, m, ix, iy = K.edge_points(grad.magnitude, grad.gx, grad.gy, phase,
-                                       np.float32(min_gradient))
+    x, y, a, m, ix, iy, index = K.edge_points(grad.magnitude, grad.gx, grad.gy, phase,
+                                              np.float32(min_gradient))
     a[a >= np.float32(2 * np.pi)] = 0.0
-    return EdgePoints(x, y, a, m, ix, iy, grad.magnitude.shape)
+    return EdgePoints(x, y, a, m, ix, iy, grad.magnitude.shape, index)
 
 
 def contrast_threshold(magnitude: np.ndarray, n: int, bins: int = 1024) -> float:
