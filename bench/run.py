@@ -22,7 +22,7 @@ degree and offset within 3 px).
     python bench/run.py                     # everything; writes docs/benchmarks.md
     python bench/run.py --quick             # a few cases per task (CI smoke), prints only
     python bench/run.py --tasks marker,pair --n 10
-    python bench/run.py --out /tmp/b.md     # write the report elsewhere
+    python bench/run.py --out report.md     # write the report elsewhere
 
 Only a full run (all tasks, default --n, no --quick) writes docs/benchmarks.md
 unless --out is given.
