@@ -48,6 +48,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from ._validate import number, pair
+from .accumulator import check_ranges
 from .config import Config
 from .detector import Detector
 from .errors import ImageError, ParameterError, SeahoughError
@@ -813,13 +815,7 @@ def _plot_trajectory(rows, path: Path, metric: bool):
 # ===================================================================== main entry
 def _metres_per_pixel(metres_per_pixel, altitude, focal_px):
     def pos(name, v):
-        try:
-            f = float(v)
-        except (TypeError, ValueError):
-            f = float("nan")
-        if not (math.isfinite(f) and f > 0):
-            raise ParameterError(f"{name}={v!r}: must be a positive number")
-        return f
+        return number(name, v, lo=0.0, lo_open=True)
 
     if metres_per_pixel is not None:
         return pos("metres_per_pixel", metres_per_pixel)
@@ -829,17 +825,6 @@ def _metres_per_pixel(metres_per_pixel, altitude, focal_px):
         raise ParameterError("altitude and focal_px go together (metres per pixel = "
                              "altitude / focal_px for a down-looking camera)")
     return pos("altitude", altitude) / pos("focal_px", focal_px)
-
-
-def _check_range(name, r, positive=False):
-    try:
-        a, b = float(r[0]), float(r[1])
-    except (TypeError, ValueError, IndexError):
-        raise ParameterError(f"{name}={r!r}: expected a (low, high) pair") from None
-    if not (math.isfinite(a) and math.isfinite(b)) or b < a or (positive and a <= 0):
-        raise ParameterError(f"{name}={r!r}: expected finite low <= high" +
-                             (", both > 0" if positive else ""))
-    return a, b
 
 
 def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal_px=None,
@@ -919,8 +904,8 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     cfg = config or ODOMETRY_CONFIG
     if not isinstance(cfg, Config):
         raise ParameterError("config must be a seahough.Config")
-    scale_range = _check_range("scale_range", scale_range, positive=True)
-    angle_range = _check_range("angle_range", angle_range)
+    scale_range, _ = check_ranges(scale_range, (0.0, 0.0))
+    angle_range = pair("angle_range", angle_range)  # kept as given: a window around 0
     mpp = _metres_per_pixel(metres_per_pixel, altitude, focal_px)
     items = list_frames(frames)
     reader = _Reader(items, cfg.max_pixels)
