@@ -307,7 +307,8 @@ class Pattern:
         config = config or Config()
         key = (round(factor, 6), config.n_pattern_points, config.n_verify_points,
                config.min_gradient, config.segment_steps, config.segment_angle_tol,
-               config.equalize, config.local_contrast, config.local_window)
+               config.equalize, config.local_contrast, config.local_window,
+               config.pattern_blur if self.kind == "image" else 0.0)
         if key not in self._cache:
             self._cache[key] = self._compute_features(factor, config)
         return self._cache[key]
@@ -316,6 +317,11 @@ class Pattern:
         gray = self._gray
         if self.polarity == "dark":
             gray = 255.0 - gray
+        if self.kind == "image" and config.pattern_blur > 0:
+            # a crop of a clear photo, searched through water: its finest
+            # texture would not be there to match (Config.pattern_blur)
+            gray = cv2.GaussianBlur(np.ascontiguousarray(gray, np.float32), (0, 0),
+                                    config.pattern_blur, borderType=cv2.BORDER_REPLICATE)
         em = self._edge_mask
         mask_w = None
         if em is not None:
