@@ -28,7 +28,7 @@ def _wrap_pi(a):
 
 # --------------------------------------------------------------------------- edges
 @njit(cache=True, fastmath=True)
-def edge_points(mag, gx, gy, phase, floor):
+def edge_points(mag, gx, gy, phase, floor, mask):
     """Non-maximum suppression across the edge, with sub-pixel position.
 
     ``phase`` is the gradient direction image (radians, [0, 2 pi)).
@@ -36,9 +36,12 @@ def edge_points(mag, gx, gy, phase, floor):
     magnitude is at least ``floor`` and is a local maximum along its gradient
     direction (quantised to 4 directions, as Canny does). The sub-pixel offset
     along that direction comes from a parabola through the three magnitudes.
-    ``index`` holds each point's id at its pixel (-1 elsewhere).
+    ``index`` holds each point's id at its pixel (-1 elsewhere). ``mask``
+    (uint8, the image's shape) limits the points to its non-zero pixels; any
+    other shape (e.g. 0x0) means the whole image.
     """
     h, w = mag.shape
+    masked = mask.shape[0] == h and mask.shape[1] == w
     n = 0  # at most one point per pixel over the floor (trimmed below)
     for y in range(1, h - 1):
         for x in range(1, w - 1):
@@ -56,7 +59,7 @@ def edge_points(mag, gx, gy, phase, floor):
     for y in range(1, h - 1):
         for x in range(1, w - 1):
             m = mag[y, x]
-            if m < floor:
+            if m < floor or (masked and mask[y, x] == 0):
                 continue
             ggx = gx[y, x]
             ggy = gy[y, x]

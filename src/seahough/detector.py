@@ -510,35 +510,59 @@ class Detector:
         tx, ty = features.gradients.to_full(fit.pose.tx, fit.pose.ty)
         return Pose(fit.pose.a, fit.pose.b, float(tx), float(ty))
 
-    def _roi(self, pose: Pose, pf1, shape):
-        """Full-resolution box (x0, y0, x1, y1) holding the pattern at ``pose``."""
-        mx, my = pose.map(pf1.vx, pf1.vy)
-        H, W = shape
-        return (int(max(0, math.floor(mx.min()) - 8)), int(max(0, math.floor(my.min()) - 8)),
-                int(min(W, math.ceil(mx.max()) + 9)), int(min(H, math.ceil(my.max()) + 9)))
+    #: Pose change the full-resolution refinement is allowed beyond its
+    #: first match radius (px) when its edges are limited to a band.
+    _band_slack = 2.0
 
-    def _full_edges(self, gray, todo, features: Features):
-        """Full-resolution edges for the candidates' boxes: one box around
-        all of them when that is cheaper than one box each."""
+    @staticmethod
+    def _full_radius(factor: float) -> float:
+        """First match radius of the full-resolution refinement (px): one
+        working pixel."""
+        return max(1.0 / factor, 2.0)
+
+    def _full_edges(self, gray, todo, features: Features, factor: float):
+        """Full-resolution edges near each candidate's pattern points, in a
+        box around them: one box around all candidates when that is cheaper
+        than one box each. Returns ``(box, edges, index)`` per candidate.
+
+        Edges farther from the pattern's points than the refinement's match
+        radius plus the distance it may move the pose could never be matched:
+        they are left out (finding them cost as much as the rest of the finish).
+        """
         pf1 = self.pattern.features(1.0, self.config)
-        boxes = [self._roi(self._full_pose(c.fit, features), pf1, gray.shape) for c in todo]
+        H, W = gray.shape
+        pts = [self._full_pose(c.fit, features).map(pf1.vx, pf1.vy) for c in todo]
+        band_r = int(math.ceil(self._full_radius(factor) + self._band_slack))
+        m = band_r + 4
+        boxes = [(int(max(0, math.floor(mx.min()) - m)), int(max(0, math.floor(my.min()) - m)),
+                  int(min(W, math.ceil(mx.max()) + m + 1)), int(min(H, math.ceil(my.max()) + m + 1)))
+                 for mx, my in pts]
         area = lambda b: max(b[2] - b[0], 0) * max(b[3] - b[1], 0)
         union = (min(b[0] for b in boxes), min(b[1] for b in boxes),
                  max(b[2] for b in boxes), max(b[3] for b in boxes))
-        cache = {}
-
-        def edges_for(box):
-            if box not in cache:
-                x0, y0, x1, y1 = box
-                grad = compute_gradients(np.ascontiguousarray(gray[y0:y1, x0:x1]), 1.0,
-                                         self.config.equalize)
-                e = find_edge_points(grad, self.config.min_gradient)
-                cache[box] = (e, e.index_map())
-            return cache[box]
-
         if sum(area(b) for b in boxes) >= area(union):
-            return [(union, edges_for) for _ in boxes]
-        return [(b, edges_for) for b in boxes]
+            groups = [(union, list(range(len(todo))))]
+        else:
+            groups = [(b, [i]) for i, b in enumerate(boxes)]
+        out = [None] * len(todo)
+        k = 2 * band_r + 1
+        for box, members in groups:
+            x0, y0, x1, y1 = box
+            if x1 - x0 < 8 or y1 - y0 < 8:
+                continue
+            grad = compute_gradients(np.ascontiguousarray(gray[y0:y1, x0:x1]), 1.0,
+                                     self.config.equalize)
+            band = np.zeros((y1 - y0, x1 - x0), np.uint8)
+            for i in members:
+                ix = np.rint(pts[i][0] - x0).astype(np.int64)
+                iy = np.rint(pts[i][1] - y0).astype(np.int64)
+                ok = (ix >= 0) & (iy >= 0) & (ix < x1 - x0) & (iy < y1 - y0)
+                band[iy[ok], ix[ok]] = 1
+            band = cv2.dilate(band, np.ones((k, k), np.uint8))
+            e = find_edge_points(grad, self.config.min_gradient, band)
+            for i in members:
+                out[i] = (box, e, e.index_map())
+        return out
 
     def _full_res(self, fit: Fit, gray, features: Features, factor: float, where=None) -> Fit:
         """Refine a working-resolution fit on the full-resolution image."""
@@ -547,16 +571,13 @@ class Detector:
         pose = self._full_pose(fit, features)
         pf1 = p.features(1.0, cfg)
         if factor < 0.999:
-            box, edges_for = where
-            x0, y0, x1, y1 = box
-            if x1 - x0 < 8 or y1 - y0 < 8:
+            if where is None:  # (a box too small to hold edges)
                 return fit
-            edges, index = edges_for(box)
+            (x0, y0, x1, y1), edges, index = where
             H, W = gray.shape
             local = Pose(pose.a, pose.b, pose.tx - x0, pose.ty - y0)
-            r = 1.0 / factor
             f = refine(local, pf1.vx, pf1.vy, pf1.vangle, edges, index,
-                       radii=(max(r, 2.0), 1.5) if cfg.refine else (), iterations=3,
+                       radii=(self._full_radius(factor), 1.5) if cfg.refine else (), iterations=3,
                        angle_tol=math.radians(cfg.angle_tolerance), either=p.either,
                        fix_scale=self.scale_range[0] == self.scale_range[1],
                        fix_angle=self.angle_range[0] == self.angle_range[1],
@@ -578,7 +599,7 @@ class Detector:
         best = max((c.work_score for c in cands), default=0.0)
         pre = max(0.85 * self.min_score, 0.6 * best)  # only those that could win
         todo = [c for c in cands if c.work_score >= pre][: self.max_results + 2]
-        wheres = self._full_edges(gray, todo, features) if todo and factor < 0.999 else [None] * len(todo)
+        wheres = self._full_edges(gray, todo, features, factor) if todo and factor < 0.999 else [None] * len(todo)
         for c, where in zip(todo, wheres):
             c.full = self._full_res(c.fit, gray, features, factor, where)
         # rank by both scores: the working scale's is smoother (less pixel

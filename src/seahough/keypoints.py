@@ -47,8 +47,15 @@ class EdgePoints:
         return m
 
 
-def find_edge_points(grad: Gradients, min_gradient: float) -> EdgePoints:
+_NO_MASK = np.zeros((0, 0), np.uint8)
+
+
+def find_edge_points(grad: Gradients, min_gradient: float,
+                     mask: np.ndarray | None = None) -> EdgePoints:
     """Thin edges to one pixel (non-maximum suppression) with sub-pixel positions.
+
+    ``mask`` (the gradients' shape, non-zero where wanted) limits the points
+    to some pixels; the suppression still compares with every neighbour.
 
     Examples
     --------
@@ -59,8 +66,9 @@ def find_edge_points(grad: Gradients, min_gradient: float) -> EdgePoints:
     (True, 26)
     """
     phase = cv2.phase(grad.gx, grad.gy)  # [0, 2 pi), vectorised (about 0.3 deg accurate)
+    mask = _NO_MASK if mask is None else np.ascontiguousarray(mask, np.uint8)
     x, y, a, m, ix, iy, index = K.edge_points(grad.magnitude, grad.gx, grad.gy, phase,
-                                              np.float32(min_gradient))
+                                              np.float32(min_gradient), mask)
     a[a >= np.float32(2 * np.pi)] = 0.0
     return EdgePoints(x, y, a, m, ix, iy, grad.magnitude.shape, index)
 
