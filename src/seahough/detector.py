@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from . import _kernels as K
 from .accumulator import AccumulatorPlanes, Bins, accumulate, check_ranges, make_bins
 from .config import Config
 from ._validate import number
@@ -301,9 +302,7 @@ class Detector:
 
     def _peaks(self, best_val, radius: int, n: int):
         """Local maxima of the dx-dy plane, highest first."""
-        k = 2 * radius + 1
-        dil = cv2.dilate(best_val, np.ones((k, k), np.uint8))
-        ys, xs = np.nonzero((best_val >= dil) & (best_val > 0))
+        ys, xs = K.local_maxima(best_val, int(radius))
         v = best_val[ys, xs]
         order = np.argsort(-v, kind="stable")[: 4 * n]
         return ys[order], xs[order], v[order]

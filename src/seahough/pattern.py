@@ -378,11 +378,12 @@ def _spread(x, y, order, count):
     best = None
     for _ in range(7):  # bisection on the spacing
         d = 0.5 * (lo + hi)
-        kept = K.spread_points(x, y, order, d, n)
+        # (the greedy pass stops at `count`: the same first points, found sooner)
+        kept = K.spread_points(x, y, order, d, count)
         if kept.size >= count:
             best, lo = kept, d
         else:
             hi = d
     if best is None:
-        best = K.spread_points(x, y, order, lo, n)
+        best = K.spread_points(x, y, order, lo, count)
     return np.sort(best[:count])
