@@ -216,6 +216,23 @@ def test_clear_photo_patch_is_found_through_water_with_the_default_threshold(see
     assert found[0].score > sharp[0].score + 0.05  # the blur is what lifts the score
 
 
+def test_pose_refined_outside_the_searched_ranges_is_flagged():
+    # a 100x60 plate at scale 1 and 30 degrees, searched just beside it:
+    # refinement reaches the true pose, and says it lies outside the ranges
+    img = np.full((240, 320), 40, np.uint8)
+    box = cv2.boxPoints(((160.0, 120.0), (100.0, 60.0), -30.0))
+    cv2.fillPoly(img, [np.round(box).astype(np.int32)], 220)
+    pattern = seahough.Pattern.rectangle(100, 60)
+    flag = seahough.detector.FLAG_OUTSIDE_RANGE
+    inside = seahough.Detector(pattern, scale_range=(0.5, 2.0)).detect(img)
+    assert inside and flag not in inside[0].flags
+    small = seahough.Detector(pattern, scale_range=(1.1, 1.5)).detect(img)
+    assert small and abs(small[0].scale - 1.0) < 0.03 and flag in small[0].flags
+    turned = seahough.Detector(pattern, scale_range=(1, 1), angle_range=(40, 60)).detect(img)
+    assert turned and abs((turned[0].angle - 30 + 90) % 180 - 90) < 1 and flag in turned[0].flags
+    assert flag not in seahough.Detector(pattern, (1, 1), (20, 40)).detect(img)[0].flags
+
+
 def test_polarity_bright_dark_or_either():
     # a dark plate on bright sand: found by polarity "dark" and "either", while
     # "bright" (a bright plate expected) does not find it

@@ -28,6 +28,10 @@ FLAG_ALONG_LINE = "position_along_line_undetermined"
 FLAG_PARTIAL = "partly_outside_image"
 #: Flag when a close runner-up makes the detection doubtful.
 FLAG_AMBIGUOUS = "ambiguous"
+#: Flag when refinement took the scale or rotation outside the searched
+#: ranges (by more than 2 % or 1 degree): the object may be there at a size
+#: or turn that was not asked for.
+FLAG_OUTSIDE_RANGE = "outside_search_range"
 
 
 @dataclass
@@ -439,6 +443,18 @@ class Detector:
         out.sort(key=lambda c: -c.work_score)
         return out
 
+    def _outside_ranges(self, scale: float, angle: float) -> bool:
+        """Is a refined pose outside the searched ranges (with a little slack)?"""
+        s0, s1 = self.scale_range
+        if not s0 / 1.02 <= scale <= s1 * 1.02:
+            return True
+        a0, a1 = self.angle_range
+        period = 180.0 if self.pattern.is_line else 360.0
+        if a1 - a0 >= period:
+            return False
+        d = (angle - a0) % period  # how far past the range's start
+        return (a1 - a0) + 1.0 < d < period - 1.0
+
     def _pose_ok(self, pose: Pose) -> bool:
         s0, s1 = self.scale_range
         return 0.8 * s0 <= pose.scale <= 1.25 * s1 and math.isfinite(pose.tx) and math.isfinite(pose.ty)
@@ -647,5 +663,7 @@ class Detector:
             flags.append(FLAG_AMBIGUOUS)
         if p.is_line:
             flags.append(FLAG_ALONG_LINE)
+        if self._outside_ranges(s, a):
+            flags.append(FLAG_OUTSIDE_RANGE)
         return Detection(float(x), float(y), float(s), float(a), float(c.full.score), confidence,
                          m, outline, c.votes, kind, la, lo, tuple(flags))
