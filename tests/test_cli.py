@@ -1,12 +1,16 @@
-"""The ``seahough`` command line, run as users run it: in a subprocess."""
+"""The ``seahough`` command line, run as users run it: the installed
+``seahough`` command (the console script beside the interpreter running the
+tests), in a subprocess."""
 
 from __future__ import annotations
 
+import csv
 import importlib.util
 import json
 import os
 import subprocess
 import sys
+import threading
 import types
 from pathlib import Path
 
@@ -18,17 +22,105 @@ import seahough
 from seahough import simulate as sim
 from seahough._data import shared_data_dir
 
-SRC = Path(__file__).resolve().parents[1] / "src"
 HAS_ODOMETRY = importlib.util.find_spec("seahough.odometry") is not None
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def seahough_command() -> Path:
+    """The installed ``seahough`` console script beside ``sys.executable``.
+
+    The tests run what users run (the entry point of the installed package),
+    never ``python -m seahough`` from the source tree: a missing command is a
+    failure, not a reason to fall back."""
+    exe = Path(sys.executable).parent / ("seahough.exe" if os.name == "nt" else "seahough")
+    if not exe.is_file():
+        pytest.fail(f"the seahough command is not installed beside {sys.executable} (no {exe}): "
+                    "install the package into this environment (pip install -e .)",
+                    pytrace=False)
+    return exe
+
+
+def _env() -> dict:
+    env = dict(os.environ)
+    env.setdefault("MPLBACKEND", "Agg")
+    return env
 
 
 def run(*args, cwd=None, timeout=180):
-    env = dict(os.environ)
-    extra = [env["PYTHONPATH"]] if env.get("PYTHONPATH") else []
-    env["PYTHONPATH"] = os.pathsep.join([str(SRC)] + extra)
-    env.setdefault("MPLBACKEND", "Agg")
-    return subprocess.run([sys.executable, "-m", "seahough", *map(str, args)], cwd=cwd, env=env,
+    return subprocess.run([str(seahough_command()), *map(str, args)], cwd=cwd, env=_env(),
                           capture_output=True, text=True, timeout=timeout)
+
+
+def run_on_terminal(*args, timeout=180):
+    """Run the command with its stderr on a pseudo-terminal, as in an
+    interactive shell (where progress bars are drawn): ``(returncode,
+    stdout, what reached the terminal)``."""
+    if os.name != "posix":
+        pytest.skip("pseudo-terminals are POSIX only")
+    import fcntl
+    import struct
+    import termios
+
+    master, slave = os.openpty()
+    # a size, as a terminal window has (tqdm draws nothing on 0 columns)
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 120, 0, 0))
+    chunks = []
+
+    def drain():
+        while True:
+            try:
+                data = os.read(master, 65536)
+            except OSError:          # EIO: the child closed the terminal
+                return
+            if not data:
+                return
+            chunks.append(data)
+
+    try:
+        proc = subprocess.Popen([str(seahough_command()), *map(str, args)], env=_env(),
+                                stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=slave)
+    finally:
+        os.close(slave)
+    reader = threading.Thread(target=drain, daemon=True)
+    reader.start()
+    try:
+        out, _ = proc.communicate(timeout=timeout)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        reader.join(10)
+        os.close(master)
+    return proc.returncode, out.decode(), b"".join(chunks).decode("utf-8", "replace")
+
+
+def png_size(path: Path) -> tuple[int, int]:
+    """``(width, height)`` of a PNG from its header, after checking that it
+    is one and that it decodes to that size."""
+    data = path.read_bytes()
+    assert data[:8] == PNG_SIGNATURE and data[12:16] == b"IHDR", f"{path} is not a PNG"
+    w, h = int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
+    im = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    assert im is not None and im.shape[:2] == (h, w), path
+    return w, h
+
+
+def csv_without_timing(path: Path) -> list:
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    for r in rows:
+        r.pop("ms")
+    return rows
+
+
+def test_cli_tests_run_the_installed_command(tmp_path, monkeypatch):
+    exe = seahough_command()
+    assert exe.parent == Path(sys.executable).parent and os.access(exe, os.X_OK)
+    proc = run("--version")
+    assert proc.returncode == 0 and proc.stdout.strip() == f"seahough {seahough.__version__}"
+    # no command beside the interpreter: a clear failure, never python -m as a fallback
+    monkeypatch.setattr(sys, "executable", str(tmp_path / "python"))
+    with pytest.raises(pytest.fail.Exception, match="seahough command is not installed"):
+        seahough_command()
 
 
 def assert_one_error_line(proc, *needles):
@@ -143,14 +235,77 @@ def test_detect_out_writes_pngs(scenes, tmp_path):
                "--json", "--quiet")
     assert proc.returncode == 1          # found in scene.png, not in neg.png
     recs = [json.loads(line) for line in proc.stdout.splitlines()]
-    assert recs[0]["overlay"] == str(tmp_path / "scene_overlay.png")
+    for rec, stem in zip(recs, ("scene", "neg")):
+        assert rec["overlay"] == str(tmp_path / f"{stem}_overlay.png")
+        assert rec["accumulator"] == str(tmp_path / f"{stem}_accumulator.png")
+        assert rec["edges"] == str(tmp_path / f"{stem}_edges.png")
+    # every image gets its three pictures, and nothing else is written
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        f"{stem}_{kind}.png" for stem in ("scene", "neg")
+        for kind in ("overlay", "accumulator", "edges"))
     for stem in ("scene", "neg"):
-        ov = cv2.imread(str(tmp_path / f"{stem}_overlay.png"))
-        ac = cv2.imread(str(tmp_path / f"{stem}_accumulator.png"))
-        assert ov is not None and ac is not None
-        assert (ov.shape[1], ov.shape[0]) == detections_size((480, 640))
-        assert ac.shape[:2] == (560, 1300)
-        assert ov.std() > 10 and ac.std() > 10
+        sizes = {kind: png_size(tmp_path / f"{stem}_{kind}.png")
+                 for kind in ("overlay", "accumulator", "edges")}
+        assert sizes == {"overlay": detections_size((480, 640)), "accumulator": (1300, 560),
+                         "edges": (1300, 560)}
+        for kind in sizes:
+            assert cv2.imread(str(tmp_path / f"{stem}_{kind}.png")).std() > 10, (stem, kind)
+        # the edges picture draws the segments (cyan) and key points (red)
+        ed = cv2.imread(str(tmp_path / f"{stem}_edges.png"))
+        cyan = (np.abs(ed.astype(int) - [255, 229, 0]).max(axis=2) < 40).sum()
+        assert cyan > 200, stem
+    # the table mode names the three files
+    proc = run("detect", d / "pattern.png", d / "scene.png", "--out", tmp_path / "t")
+    assert proc.returncode == 0, proc.stderr
+    wrote = [ln for ln in proc.stdout.splitlines() if ln.strip().startswith("wrote ")]
+    assert len(wrote) == 1 and str(tmp_path / "t" / "scene_edges.png") in wrote[0]
+    assert "_edges.png" in run("detect", "--help").stdout.replace("\n", " ")
+
+
+def test_not_found_says_why(tmp_path):
+    """An image the search cannot run on says why (SearchResult.note), in
+    the table and in the JSON record; the exit status stays 1."""
+    cv2.imwrite(str(tmp_path / "black.png"), np.zeros((120, 160), np.uint8))
+    cv2.imwrite(str(tmp_path / "grey.png"), np.full((120, 160, 3), 128, np.uint8))
+    small = np.full((120, 160), 40, np.uint8)
+    cv2.rectangle(small, (50, 40), (110, 80), 220, -1)
+    cv2.imwrite(str(tmp_path / "small.png"), small)
+    proc = run("detect", "rect:60,40", tmp_path / "black.png", tmp_path / "grey.png")
+    assert proc.returncode == 1 and proc.stderr == "", proc.stderr
+    lines = proc.stdout.splitlines()
+    assert len(lines) == 2
+    for line, name in zip(lines, ("black.png", "grey.png")):
+        assert line.startswith(str(tmp_path / name) + "  160x120  not found (no edges)  ("), line
+    proc = run("detect", "rect:60,40", tmp_path / "black.png", "--json")
+    assert proc.returncode == 1
+    rec = json.loads(proc.stdout)
+    assert rec["found"] is False and rec["detections"] == [] and rec["note"] == "no edges"
+    # a pattern too large at every searched scale says so; a search that ran has no note
+    proc = run("detect", "rect:600,400", tmp_path / "small.png", "--scale-range", 1, 1)
+    assert proc.returncode == 1
+    assert "  not found (pattern larger than the image)  (" in proc.stdout, proc.stdout
+    proc = run("detect", "rect:60,40", tmp_path / "small.png", "--json")
+    assert proc.returncode == 0
+    assert json.loads(proc.stdout)["note"] == ""
+
+
+def test_angles_near_360_are_printed_wrapped():
+    """The table prints the rounded angle in [0, 360) (lines: [0, 180))."""
+    from seahough.cli import _detection_lines, format_angle
+
+    assert format_angle(359.998) == "0.00" and format_angle(359.994) == "359.99"
+    assert format_angle(359.96, 1) == "0.0" and format_angle(0.004) == "0.00"
+    assert format_angle(179.999, 2, 180.0) == "0.00" and format_angle(-0.001) == "0.00"
+    assert format_angle(360.0) == "0.00" and format_angle(725.5, 1) == "5.5"
+    obj = types.SimpleNamespace(kind="object", x=10.0, y=20.0, scale=1.0, angle=359.998,
+                                score=0.9, confidence=0.8, flags=[])
+    row = _detection_lines([obj])[1].split()
+    assert row[4] == "0.00", row
+    line = types.SimpleNamespace(kind="line", x=10.0, y=20.0, scale=1.0, angle=359.998,
+                                 line_angle=179.9991, line_offset=-3.0, score=0.9,
+                                 confidence=0.8, flags=["position_along_line_undetermined"])
+    row = _detection_lines([line])[1].split()
+    assert row[1] == "0.00", row
 
 
 def test_shape_pattern_and_line(tmp_path):
@@ -292,16 +447,106 @@ def test_odometry_on_simulated_sequence(tmp_path):
     assert summary["csv"] and Path(summary["csv"]).exists()
 
 
+def test_simulate_progress_bar_and_quiet(tmp_path):
+    """Like detect: a progress bar on stderr only when it is a terminal and
+    there are several scenes, and --quiet leaves stderr empty."""
+    args = ("simulate", "marker", "--n", 3, "--procedural", "--size", 160, 120, "--seed", 1)
+    rc, out, tty = run_on_terminal(*args, "--out", tmp_path / "a")
+    assert rc == 0, tty
+    assert "simulate: " in tty and "/3 [" in tty, tty            # the bar was drawn
+    assert out.splitlines()[0] == f"wrote 3 scenes and {tmp_path / 'a' / 'truth.json'}"
+    rc, out, tty = run_on_terminal(*args, "--out", tmp_path / "b", "--quiet")
+    assert rc == 0 and tty == "", tty
+    assert out.splitlines() == [f"wrote 3 scenes and {tmp_path / 'b' / 'truth.json'}"]
+    proc = run(*args, "--out", tmp_path / "c")                  # stderr is a pipe: no bar
+    assert proc.returncode == 0 and proc.stderr == "", proc.stderr
+    proc = run(*args, "--out", tmp_path / "d", "--quiet")
+    assert proc.returncode == 0 and proc.stderr == "", proc.stderr
+    # the same scenes, bar or not
+    for sub in ("b", "c", "d"):
+        assert (tmp_path / sub / "truth.json").read_text() == \
+            (tmp_path / "a" / "truth.json").read_text()
+    rc, out, tty = run_on_terminal("simulate", "sequence", "--n", 4, "--procedural",
+                                   "--out", tmp_path / "s")
+    assert rc == 0 and "/4 [" in tty, tty
+
+
+@pytest.fixture(scope="module")
+def sequence_dir(tmp_path_factory):
+    """A short simulated sequence, written by `seahough simulate`."""
+    d = tmp_path_factory.mktemp("sequence") / "seq"
+    proc = run("simulate", "sequence", "--out", d, "--n", 8, "--procedural", "--seed", 5,
+               "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    return d
+
+
+@pytest.mark.skipif(not HAS_ODOMETRY, reason="seahough.odometry is not there yet")
+def test_odometry_progress_bar_like_detect(sequence_dir, tmp_path):
+    """On a terminal the bar is drawn, --quiet removes it; into a pipe or a
+    log file it is not drawn (as detect's)."""
+    args = ("odometry", sequence_dir, "--no-mosaic", "--json")
+    rc, out, tty = run_on_terminal(*args, "--out", tmp_path / "a")
+    assert rc == 0, tty
+    assert "odometry" in tty and "/8 [" in tty, tty
+    rc, out, tty = run_on_terminal(*args, "--out", tmp_path / "b", "--quiet")
+    assert rc == 0 and tty == "", tty
+    proc = run(*args, "--out", tmp_path / "c")
+    assert proc.returncode == 0 and proc.stderr == "", proc.stderr
+    assert json.loads(proc.stdout)["frames"] == 8
+
+
+@pytest.mark.skipif(not HAS_ODOMETRY, reason="seahough.odometry is not there yet")
+def test_odometry_resume_after_a_killed_run(sequence_dir, tmp_path):
+    """--resume continues the CSV a killed run left (a header, a few rows
+    and a row cut short) to the result of an uninterrupted run."""
+    proc = run("odometry", sequence_dir, "--out", tmp_path / "full", "--quiet", "--no-mosaic",
+               "--json")
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout)["summary"]["resumed_rows"] == 0
+    lines = (tmp_path / "full" / "odometry.csv").read_text().splitlines(keepends=True)
+    assert len(lines) == 9                                       # header + 8 frames
+    killed = tmp_path / "killed"
+    killed.mkdir()
+    (killed / "odometry.csv").write_text("".join(lines[:4]) + lines[4][: len(lines[4]) // 2])
+    proc = run("odometry", sequence_dir, "--out", killed, "--quiet", "--no-mosaic", "--json",
+               "--resume")
+    assert proc.returncode == 0, proc.stderr
+    summary = json.loads(proc.stdout)
+    assert summary["frames"] == 8
+    assert summary["summary"]["resumed_rows"] == 3              # the cut row is measured again
+    assert csv_without_timing(killed / "odometry.csv") == \
+        csv_without_timing(tmp_path / "full" / "odometry.csv")
+
+
 def test_demo_end_to_end(tmp_path):
+    from seahough.plot import detections_size
+
     proc = run("demo", "--out", tmp_path / "demo", "--quiet", timeout=120)
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    assert "Traceback" not in proc.stderr
+    assert proc.stderr == "", proc.stderr
     out = tmp_path / "demo"
-    for name in ("marker_scene.png", "marker_overlay.png", "marker_accumulator.png",
-                 "marker_edges.png", "rope_overlay.png", "rope_accumulator.png",
-                 "sequence/frame_000.png", "sequence/frame_007.png"):
-        assert cv2.imread(str(out / name)) is not None, name
+    overlay = detections_size((480, 640))
+    pattern_h, pattern_w = sim.marker("board")[0].shape[:2]
+    want = {"marker_scene.png": (640, 480), "marker_pattern.png": (pattern_w, pattern_h),
+            "marker_overlay.png": overlay, "marker_accumulator.png": (1300, 560),
+            "marker_edges.png": (1300, 560), "rope_scene.png": (640, 480),
+            "rope_overlay.png": overlay, "rope_accumulator.png": (1300, 560),
+            **{f"sequence/frame_{i:03d}.png": (320, 240) for i in range(8)}}
+    if HAS_ODOMETRY:
+        want.update({"trajectory.png": (900, 800), "odometry/trajectory.png": (900, 800),
+                     "odometry/mosaic.png": None})
+    # every picture the demo writes is checked: a new one must be added here
+    written = sorted(p.relative_to(out).as_posix() for p in out.rglob("*.png"))
+    assert written == sorted(want)
+    for name, size in want.items():
+        w, h = png_size(out / name)
+        if size is None:                 # the mosaic: the frames' union, turned and shifted
+            assert 320 <= w <= 4 * 320 and 240 <= h <= 4 * 240, (name, w, h)
+        else:
+            assert (w, h) == tuple(size), name
+        im = cv2.imread(str(out / name))
+        assert im.std() > 5, f"{name} is (almost) blank"
     assert "marker position" in proc.stdout and "rope offset" in proc.stdout
     if HAS_ODOMETRY:
-        assert cv2.imread(str(out / "trajectory.png")) is not None
         assert "drift" in proc.stdout

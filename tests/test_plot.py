@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import types
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -135,3 +136,233 @@ def test_save_mosaic(tmp_path):
     p = plot.save_mosaic(mosaic, tmp_path / "sub" / "mosaic.png")
     back = cv2.imread(str(p))
     assert back is not None and np.array_equal(back, mosaic)
+
+
+# ------------------------------------------------------------ labels and markers
+def _planes(n_angles=64, scales=(0.8, 0.9, 1.0, 1.1, 1.25), a0=0.0, span=360.0):
+    """Synthetic accumulator planes: a flat 2-D grid, no votes yet."""
+    from seahough.accumulator import AccumulatorPlanes
+
+    w = span / n_angles
+    angles = (a0 + (np.arange(n_angles) + 0.5) * w) % 360.0
+    sa = np.zeros((len(scales), n_angles), np.float32)
+    xy = np.zeros((20, 30), np.float32)
+    z = np.zeros(xy.shape, np.int32)
+    return AccumulatorPlanes(xy, z, z, sa, np.asarray(scales, float), angles,
+                             np.arange(30) * 10.0, np.arange(20) * 10.0)
+
+
+def test_det_label_wraps_rounded_angles():
+    obj = types.SimpleNamespace(kind="object", score=0.9, confidence=0.8, scale=1.0,
+                                angle=359.98)
+    assert plot._det_label(obj).endswith(" · 0.0°"), plot._det_label(obj)
+    obj.angle = 359.94
+    assert plot._det_label(obj).endswith(" · 359.9°")
+    line = types.SimpleNamespace(kind="line", score=0.9, confidence=0.8, scale=1.0, angle=0.0,
+                                 line_angle=179.97, line_offset=2.0)
+    assert " · line 0.0° · " in plot._det_label(line), plot._det_label(line)
+
+
+def test_scale_angle_marker_sits_on_the_cell_it_refers_to():
+    p = _planes()                                  # 64 cells of 5.625 degrees, 0..360
+    k = 2                                          # the scale 1.0 row
+    p.scale_angle[k, 0] = 2.0                      # the peak: first cell
+    p.scale_angle[k, -1] = 0.5
+    x, s = plot.scale_angle_marker(p, 1.0, 359.998)
+    assert 0.0 < x < 5.625 and x == pytest.approx(2.8125) and s == 1.0
+    # the same angle, the peak in the last cell: marked there, inside the plane
+    p.scale_angle[k, 0], p.scale_angle[k, -1] = 0.5, 2.0
+    x, _ = plot.scale_angle_marker(p, 1.0, 359.998)
+    assert 354.375 < x < 360.0 and x == pytest.approx(357.1875)
+    # away from the seam: the angle's own cell, even next to a brighter one farther off
+    p.scale_angle[:] = 0
+    p.scale_angle[k, 17] = 1.0                     # 95.6..101.25
+    p.scale_angle[k, 19] = 3.0
+    x, _ = plot.scale_angle_marker(p, 1.0, 100.0)
+    assert 95.625 < x < 101.25
+    # a refined angle just across a border from its peak goes to the peak's cell
+    x, _ = plot.scale_angle_marker(p, 1.0, 101.5)
+    assert 95.625 < x < 101.25
+    # scale too: the nearer neighbouring row when it holds the peak
+    p.scale_angle[:] = 0
+    p.scale_angle[3, 10] = 2.0                     # scale 1.1
+    x, s = plot.scale_angle_marker(p, 1.04, 10.0 * 5.625 + 1.0)
+    assert s == 1.1
+    # a search of -40..40: shown as -40..40, an angle of 350 is -10
+    q = _planes(16, a0=320.0, span=80.0)
+    x, _ = plot.scale_angle_marker(q, 1.0, 350.0)
+    assert -15.0 < x < -5.0
+    x, _ = plot.scale_angle_marker(q, 1.0, 100.0)  # outside: the nearer end's cell
+    assert x == pytest.approx(37.5)
+
+
+def _ring_xs(ax):
+    return [float(ln.get_xdata()[0]) for ln in ax.lines if ln.get_marker() == "o"]
+
+
+def test_accumulator_ring_near_360_is_inside_the_plane(box_search, tmp_path):
+    _, _, res = box_search
+    planes = res.planes
+    d = res.detections[0]
+    # the detection as if refined to just below 360, its peak in the first cell
+    k = int(np.argmin(np.abs(np.log(planes.scales) - np.log(d.scale))))
+    planes = _planes(len(planes.angles), planes.scales)
+    planes.scale_angle[k, 0] = 2.0
+    det = types.SimpleNamespace(x=100.0, y=100.0, scale=d.scale, angle=359.998)
+    fig = plot.plot_accumulator(planes, [det], tmp_path / "seam.png")
+    ax2 = fig.axes[2]
+    lo, hi = ax2.get_xlim()
+    xs = _ring_xs(ax2)
+    assert xs and all(lo < x < lo + 360.0 / len(planes.angles) for x in xs), (xs, lo, hi)
+
+
+def test_accumulator_labels_of_coinciding_peaks_do_not_overlap(box_search, tmp_path):
+    _, _, res = box_search
+    d = res.detections[0]
+    dets = [types.SimpleNamespace(x=d.x + dx, y=d.y, scale=d.scale, angle=a)
+            for dx, a in ((0, 350.0), (1, 359.99), (2, 0.5), (3, 351.0), (150, 350.5))]
+    fig = plot.plot_accumulator(res.planes, dets, tmp_path / "many.png")
+    renderer = fig.canvas.get_renderer()
+    for ax in (fig.axes[0], fig.axes[2]):
+        labels = [t for t in ax.texts if t.get_text().startswith("#")]
+        assert sorted(t.get_text() for t in labels) == [f"#{i}" for i in range(1, 6)]
+        boxes = [t.get_window_extent(renderer) for t in labels]
+        for i in range(len(boxes)):
+            for j in range(i + 1, len(boxes)):
+                assert not boxes[i].overlaps(boxes[j]), (labels[i].get_text(),
+                                                         labels[j].get_text())
+    assert read_png(tmp_path / "many.png").shape[:2] == (560, 1300)
+
+
+def test_vote_colour_bars_say_that_heights_can_exceed_one(box_search):
+    _, _, res = box_search
+    assert res.planes.xy.max() > 1.0            # why the old "1.0 = one vote..." misled
+    fig = plot.plot_accumulator(res.planes, res.detections)
+    labels = [a.get_ylabel() for a in fig.axes if "vote" in a.get_ylabel()]
+    assert len(labels) == 2 and all(lab == plot._VOTES for lab in labels)
+    assert "exceed 1" in plot._VOTES and "1.0 = one vote" not in plot._VOTES
+    assert "not a\n    detection's ``score``" in plot.plot_accumulator.__doc__
+
+
+def _narrow_scene():
+    img = np.full((600, 80), 40, np.uint8)
+    cv2.rectangle(img, (30, 100), (49, 119), 220, -1)
+    cv2.rectangle(img, (25, 400), (44, 419), 220, -1)
+    return img
+
+
+@pytest.mark.parametrize("n", [2, 1, 0])
+def test_narrow_image_labels_stay_inside_the_figure_and_off_the_axes(tmp_path, n):
+    from matplotlib.offsetbox import AnchoredOffsetbox
+
+    img = _narrow_scene()
+    pattern = seahough.Pattern.rectangle(20, 20)
+    dets = seahough.Detector(pattern, max_results=2).detect(img)[:n] if n else []
+    assert len(dets) == n
+    fig = plot.plot_detections(img, dets, tmp_path / "tall.png", pattern=pattern,
+                               title=f"tall.png: {n}")
+    im = read_png(tmp_path / "tall.png")
+    assert (im.shape[1], im.shape[0]) == plot.detections_size(img.shape)
+    renderer = fig.canvas.get_renderer()
+    ax = fig.axes[0]
+    fig_box = fig.bbox
+    ticks = [t.get_window_extent(renderer) for t in ax.get_xticklabels() + ax.get_yticklabels()
+             if t.get_text()]
+    ticks += [ax.xaxis.label.get_window_extent(renderer),
+              ax.yaxis.label.get_window_extent(renderer)]
+    notes = [a for a in ax.artists if isinstance(a, AnchoredOffsetbox)]
+    notes += [t for t in fig.texts + ax.texts
+              if t.get_text() == "not found" or "score" in t.get_text()]
+    assert notes                                      # the labels or the note are drawn
+    image = ax.get_window_extent(renderer)            # the image as drawn
+    for a in notes:
+        bb = a.get_window_extent(renderer)
+        assert (bb.x0 >= fig_box.x0 - 0.5 and bb.x1 <= fig_box.x1 + 0.5 and
+                bb.y0 >= fig_box.y0 - 0.5 and bb.y1 <= fig_box.y1 + 0.5), bb
+        # on the image, or clear of it, its ticks and its axis labels
+        inside = (bb.x0 >= image.x0 - 0.5 and bb.x1 <= image.x1 + 0.5 and
+                  bb.y0 >= image.y0 - 0.5 and bb.y1 <= image.y1 + 0.5)
+        assert inside or not bb.overlaps(image), (bb, image)
+        for t in ticks:
+            assert not bb.overlaps(t), (bb, t)
+    for t in ax.texts + fig.texts:
+        if t.get_text():
+            assert t.get_fontsize() >= 10                    # readable
+
+
+def test_trajectory_truth_and_estimate_both_show(tmp_path):
+    """Where the estimate lies on the truth, both show: the estimate's line
+    on top, the truth's band on both sides of it."""
+    t = np.linspace(0, np.pi, 12)
+    xy = np.c_[100 * np.cos(t), 60 * np.sin(t)]
+    rows = [{"index": i, "x": x, "y": y, "heading": None, "flags": []}
+            for i, (x, y) in enumerate(xy)]
+    fig = plot.plot_trajectory(rows, tmp_path / "same.png", truth=xy)
+    im = read_png(tmp_path / "same.png")
+    ax = fig.axes[0]
+    pts = ax.transData.transform(xy)                  # display px, y up
+    pts[:, 1] = im.shape[0] - pts[:, 1]               # image rows, y down
+    truth_rgb = np.array([int(plot.TRUTH_COLOUR[i:i + 2], 16) for i in (5, 3, 1)])
+    blue = np.array([0xbf, 0x5f, 0x1f])
+    n_band = n_line = 0
+    for a, b in zip(pts[:-1], pts[1:]):
+        mid = (a + b) / 2                             # between two frames' rings
+        d = (b - a) / np.hypot(*(b - a))
+        normal = np.array([-d[1], d[0]])
+        c = np.round(mid).astype(int)
+        n_line += np.abs(im[c[1], c[0]].astype(int) - blue).max() < 60
+        for side in (-1, 1):
+            q = np.round(mid + side * 4.5 * normal).astype(int)
+            n_band += np.abs(im[q[1], q[0]].astype(int) - truth_rgb).max() < 30
+    assert n_line >= 9, n_line                        # of 11 segments: the estimate on top
+    assert n_band >= 18, n_band                       # of 22 sides: the truth around it
+
+
+# ------------------------------------------------------------- README pictures
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_every_picture_the_readme_shows_exists():
+    import re
+
+    text = (ROOT / "README.md").read_text()
+    links = re.findall(r"!\[[^\]]*\]\(([^)\s]+)", text) + re.findall(r"<img[^>]+src=\"([^\"]+)\"",
+                                                                     text)
+    assert links, "the README shows no pictures?"
+    for link in links:
+        if "://" in link:
+            continue
+        p = ROOT / link
+        assert p.is_file(), f"README links {link}, which does not exist"
+        im = cv2.imread(str(p))
+        assert im is not None and im.std() > 5, link
+        assert p.stat().st_size < 150_000, f"{link} is {p.stat().st_size} bytes"
+        assert im.shape[1] <= 1000, link
+    assert sum(f.stat().st_size for f in (ROOT / "docs" / "images").iterdir()) < 1_000_000
+
+
+def test_make_images_regenerates_the_readme_pictures(tmp_path):
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("make_images", ROOT / "docs" / "make_images.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    made = mod.make_images(tmp_path)
+    assert sorted(made) == ["demo_accumulator.jpg", "demo_overlay.jpg"]
+    for name, (w, h, size) in made.items():
+        im = cv2.imread(str(tmp_path / name))
+        assert im is not None and (im.shape[1], im.shape[0]) == (w, h)
+        assert w <= mod.README_WIDTH and size < 150_000 and im.std() > 5
+        # the names the README links
+        assert f"docs/images/{name}" in (ROOT / "README.md").read_text()
+    # the planes are stacked at full size (not shrunk), so their text stays readable
+    w, h, _ = made["demo_accumulator.jpg"]
+    assert 500 <= w <= mod.README_WIDTH and h > 1.5 * w * 560 / 1300
+
+
+def test_accumulator_without_planes_says_why():
+    fig = plot.plot_accumulator(None, [], note="pattern larger than the image")
+    assert [t.get_text() for t in fig.axes[0].texts] == [
+        "no accumulator: pattern larger than the image"]
+    fig = plot.plot_accumulator(None, [])
+    assert "no edges" in fig.axes[0].texts[0].get_text()

@@ -2,8 +2,8 @@
 determinism, and dead reckoning over a folder with broken frames.
 
 Every bad input must give a specific :class:`seahough.SeahoughError` subclass
-(or the documented empty result) through the API, and through
-``python -m seahough detect`` exactly one ``seahough: error: ...`` line on
+(or the documented empty result) through the API, and through the installed
+``seahough detect`` command exactly one ``seahough: error: ...`` line on
 stderr naming the file (or parameter) and the problem, with exit status 2,
 never a traceback. See docs/errors.md for the table this file checks.
 
@@ -38,7 +38,6 @@ from seahough import (Config, Detector, ImageError, ImageReadError, ImageSizeErr
                       estimate_motion, read_image, to_gray)
 from seahough import simulate as sim
 
-SRC = Path(__file__).resolve().parents[1] / "src"
 #: address-space limit of the command-line subprocesses (a seahough process
 #: peaks at under 1 GiB of virtual memory; a decoded bomb needs far more)
 AS_LIMIT = 4 << 30
@@ -54,10 +53,20 @@ _SLOW = {
 
 
 # ------------------------------------------------------------------ helpers
+def seahough_command() -> Path:
+    """The installed ``seahough`` console script beside ``sys.executable``
+    (as in test_cli.py): the command users run, never ``python -m`` from the
+    source tree; a missing command fails the test instead of falling back."""
+    exe = Path(sys.executable).parent / ("seahough.exe" if os.name == "nt" else "seahough")
+    if not exe.is_file():
+        pytest.fail(f"the seahough command is not installed beside {sys.executable} (no {exe}): "
+                    "install the package into this environment (pip install -e .)",
+                    pytrace=False)
+    return exe
+
+
 def _env(**extra) -> dict:
     env = dict(os.environ)
-    old = [env["PYTHONPATH"]] if env.get("PYTHONPATH") else []
-    env["PYTHONPATH"] = os.pathsep.join([str(SRC)] + old)
     env["MPLBACKEND"] = "Agg"
     env.update({k: str(v) for k, v in extra.items()})
     return env
@@ -77,7 +86,7 @@ class Run:
         self.argv, self.rc, self.stdout, self.stderr, self.seconds = argv, rc, out, err, seconds
 
     def __repr__(self):
-        return (f"Run(rc={self.rc}, {self.seconds:.1f} s, argv={self.argv[2:]!r},\n"
+        return (f"Run(rc={self.rc}, {self.seconds:.1f} s, argv={self.argv[1:]!r},\n"
                 f"stdout={self.stdout[-800:]!r},\nstderr={self.stderr[-1500:]!r})")
 
 
@@ -94,7 +103,7 @@ def _run(argv, timeout=HANG_S, env=None, cwd=None) -> Run:
 
 
 def _cli(*args) -> list:
-    return [sys.executable, "-m", "seahough", *map(str, args)]
+    return [str(seahough_command()), *map(str, args)]
 
 
 def _py(code: str) -> list:
@@ -295,11 +304,11 @@ BAD_ARGS = [
 _ARG_BUGS: dict = {}
 
 # The command-line cases. Most run through one driver process that calls
-# seahough.cli.main -- what `python -m seahough` runs -- once per case, with
+# seahough.cli.main -- what the `seahough` command runs -- once per case, with
 # file descriptors 1 and 2 redirected, so that output written by C libraries
 # (libpng, libjpeg) is caught too; this saves an interpreter start-up per case.
 # Cases that must be seen from outside (a whole command line, a hang, a crash)
-# run as `python -m seahough ...` in their own process.
+# run as `seahough ...` (the installed command) in their own process.
 _DRIVER = r"""
 import json, os, sys, tempfile, traceback
 from seahough.cli import main
@@ -390,7 +399,7 @@ class _CliRuns:
             assert r.rc == 0 and self._results.is_file(), r
             self._parsed = json.loads(self._results.read_text())
         rc, out, err = self._parsed[key]
-        return Run(["python", "-m", "seahough", *self._drv_cases[key]], rc, out, err, 0.0)
+        return Run(["seahough", *self._drv_cases[key]], rc, out, err, 0.0)
 
     def close(self):
         self._pool.shutdown(wait=True, cancel_futures=True)
@@ -429,6 +438,58 @@ def test_bad_file_gives_one_error_line_and_exit_2(cli_runs, corpus, case, fname,
     r = cli_runs[f"file {case}"]
     line = assert_one_error_line(r, str(corpus / fname), words)
     assert line.startswith(f"seahough: error: {corpus / fname}: "), line
+
+
+_OPENCV_LOG = ("[ WARN:0@0.518] global grfmt_png.cpp:793 read_from_io libpng warning: Image width "
+               "is zero in IHDR\n"
+               "[DEBUG:0@0.519] global parallel.cpp:114 createDefaultParallelForAPI "
+               "core(parallel)\n"
+               "[ WARN:0@0.520] global loadsave.cpp:1095 imdecode_ imdecode_('.png'): can't read "
+               "header: OpenCV(4.10.0) /io/opencv/modules/imgcodecs/src/grfmt_png.cpp:240: error\n")
+
+
+def _assert_clean(line: str):
+    for noise in ("[", "WARN", "DEBUG", ".cpp", "global ", "libpng", "OpenCV(", "\n"):
+        assert noise not in line, (noise, line)
+
+
+def test_decoder_log_text_becomes_one_clean_phrase(corpus, monkeypatch, tmp_path):
+    """What the decoders print while failing (libpng's warnings, or OpenCV's
+    log lines with level, time, source file and line) is kept to a phrase."""
+    from seahough.imageio import _first_line
+
+    assert _first_line(_OPENCV_LOG) == "PNG: image width is zero in IHDR"
+    assert _first_line(_OPENCV_LOG.split("\n", 1)[1]) == "can't read header"
+    assert _first_line("libpng warning: Image width is zero in IHDR\n"
+                       "libpng error: Invalid IHDR data\n") == "PNG: image width is zero in IHDR"
+    assert _first_line("") == "" and _first_line("[DEBUG:0@0.1] global a.cpp:1 f x\n") == ""
+    # through read_image: a decoder that logs the OpenCV way on fd 2 and fails
+    real = cv2.imdecode
+
+    def logging_imdecode(buf, flags):
+        os.write(2, _OPENCV_LOG.encode())
+        return None
+
+    monkeypatch.setattr(cv2, "imdecode", logging_imdecode)
+    with pytest.raises(ImageReadError) as info:
+        read_image(corpus / "scene.png")
+    monkeypatch.setattr(cv2, "imdecode", real)
+    msg = str(info.value)
+    assert msg == (f"{corpus / 'scene.png'}: not an image OpenCV can decode "
+                   "(PNG: image width is zero in IHDR)"), msg
+    # the real 0x0 PNG, through the command: one clean line naming the file
+    with pytest.raises(ImageReadError) as info:
+        read_image(corpus / "zero.png")
+    msg = str(info.value)
+    assert msg.startswith(f"{corpus / 'zero.png'}: not an image OpenCV can decode"), msg
+    _assert_clean(msg)
+
+
+def test_zero_size_png_gives_a_clean_line(cli_runs, corpus):
+    line = assert_one_error_line(cli_runs["file PNG header 0x0"], str(corpus / "zero.png"))
+    assert line.startswith(f"seahough: error: {corpus / 'zero.png'}: not an image OpenCV can "
+                           "decode"), line
+    _assert_clean(line)
 
 
 def test_bad_files_among_a_good_one_each_get_their_own_line(cli_runs, corpus):

@@ -175,13 +175,41 @@ class _Output:
             _err(line)
 
 
-def _progress(iterable, total, desc, enabled):
-    """A tqdm bar on stderr, only when wanted and stderr is a terminal."""
+def _stderr_is_terminal() -> bool:
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        return False
+
+
+def _progress(iterable, total, desc, enabled, unit="img"):
+    """A tqdm bar on stderr, only when wanted and stderr is a terminal
+    (``disable=None``), wiped when done (``leave=False``)."""
     if not enabled:
         return None
     from tqdm import tqdm
-    return tqdm(iterable, total=total, desc=desc, unit="img", file=sys.stderr, disable=None,
+    return tqdm(iterable, total=total, desc=desc, unit=unit, file=sys.stderr, disable=None,
                 leave=False, dynamic_ncols=True)
+
+
+def format_angle(degrees: float, decimals: int = 2, period: float = 360.0) -> str:
+    """``degrees`` as text in ``[0, period)``, wrapped after rounding.
+
+    A value that rounds up to the period is written as 0, so that a
+    printed angle stays in the documented range.
+
+    >>> format_angle(359.998), format_angle(359.998, 1), format_angle(179.97, 1, 180.0)
+    ('0.00', '0.0', '0.0')
+    >>> format_angle(-30.0), format_angle(12.345, 1)
+    ('330.00', '12.3')
+    """
+    a = float(degrees)
+    if not math.isfinite(a):
+        return f"{a}"
+    r = round(a % period, decimals)
+    if r >= period:
+        r -= period
+    return f"{r + 0.0:.{decimals}f}"      # + 0.0: never "-0.00"
 
 
 def _table(rows, header, left=False) -> list[str]:
@@ -202,13 +230,14 @@ def _detection_lines(dets) -> list[str]:
 
     if dets and dets[0].kind == "line":
         header = ("#", "line_angle", "offset", "x", "y", "width_scale", "score", "conf", "flags")
-        rows = [(i + 1, f"{d.line_angle:.2f}", f"{d.line_offset:.2f}", f"{d.x:.2f}", f"{d.y:.2f}",
-                 f"{d.scale:.3f}", f"{d.score:.2f}", f"{d.confidence:.2f}",
+        rows = [(i + 1, format_angle(d.line_angle, 2, 180.0), f"{d.line_offset:.2f}",
+                 f"{d.x:.2f}", f"{d.y:.2f}", f"{d.scale:.3f}", f"{d.score:.2f}",
+                 f"{d.confidence:.2f}",
                  ",".join(f for f in d.flags if f != FLAG_ALONG_LINE))
                 for i, d in enumerate(dets)]
     else:
         header = ("#", "x", "y", "scale", "angle", "score", "conf", "flags")
-        rows = [(i + 1, f"{d.x:.2f}", f"{d.y:.2f}", f"{d.scale:.3f}", f"{d.angle:.2f}",
+        rows = [(i + 1, f"{d.x:.2f}", f"{d.y:.2f}", f"{d.scale:.3f}", format_angle(d.angle, 2),
                  f"{d.score:.2f}", f"{d.confidence:.2f}", ",".join(d.flags))
                 for i, d in enumerate(dets)]
     return _table(rows, header)
@@ -263,7 +292,9 @@ def cli():
 @click.option("--json", "as_json", is_flag=True,
               help="One JSON object per image and line (JSON Lines) instead of tables.")
 @click.option("--out", "-o", type=click.Path(file_okay=False), default=None,
-              help="Write <stem>_overlay.png and <stem>_accumulator.png per image here.")
+              help="Write pictures per image here: <stem>_overlay.png (detections), "
+              "<stem>_accumulator.png (the vote planes) and <stem>_edges.png (gradients, key "
+              "points and segments).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar or notes; results only.")
 def detect(pattern, images, scale_range, angle_range, max_results, min_score, min_confidence,
            downscale, keypoints, equalize, polarity, mask, as_json, out, quiet):
@@ -279,8 +310,11 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
 
     \b
     Positions are pattern-origin pixels (x right, y down); angles degrees
-    counter-clockwise as displayed. A progress bar is shown on stderr for
-    several images when stderr is a terminal.
+    counter-clockwise as displayed, in [0, 360) (lines: [0, 180)). When the
+    search could not run, the line says why, e.g. "not found (no edges)" or
+    "not found (pattern larger than the image)"; the JSON "note" field holds
+    the same ("" when the search ran). A progress bar is shown on stderr
+    for several images when stderr is a terminal.
 
     \b
     Exit status: 0 the pattern was found in every image; 1 it was not found
@@ -326,6 +360,8 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
             continue
         ms = 1000.0 * (time.perf_counter() - t0)
         dets = res.detections
+        # why the search could not run (SearchResult.note), e.g. " (no edges)"
+        why = f" ({res.note})" if res.note else ""
         h, w = img.shape[:2]
         written = {}
         if out_dir is not None:
@@ -337,18 +373,23 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
             if k:
                 stem = f"{stem}_{k + 1}"
             n = len(dets)
-            head = f"{Path(name).name}: " + ("not found" if n == 0 else
+            head = f"{Path(name).name}: " + (f"not found{why}" if n == 0 else
                                              f"{n} detection{'s' if n > 1 else ''}")
             ov = out_dir / f"{stem}_overlay.png"
             ac = out_dir / f"{stem}_accumulator.png"
+            ed = out_dir / f"{stem}_edges.png"
             plot.plot_detections(img, dets, ov, pattern=pat, title=head)
-            plot.plot_accumulator(res.planes, dets, ac, title=f"{Path(name).name}: accumulator")
-            written = {"overlay": str(ov), "accumulator": str(ac)}
+            plot.plot_accumulator(res.planes, dets, ac, title=f"{Path(name).name}: accumulator",
+                                  note=res.note)
+            plot.plot_edges(img, res.features, ed, config=cfg,
+                            title=f"{Path(name).name}: what the detector sees")
+            written = {"overlay": str(ov), "accumulator": str(ac), "edges": str(ed)}
         if not dets:
             n_missing += 1
         if as_json:
             rec = {"file": name, "width": int(w), "height": int(h), "found": bool(dets),
-                   "detections": [d.to_dict() for d in dets], "time_ms": round(ms, 3)}
+                   "note": res.note, "detections": [d.to_dict() for d in dets],
+                   "time_ms": round(ms, 3)}
             rec.update(written)
             say(_dumps(rec))
         else:
@@ -357,9 +398,9 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
                 for line in _detection_lines(dets):
                     say(line)
             else:
-                say(f"{name}  {w}x{h}  not found  ({ms:.0f} ms)")
+                say(f"{name}  {w}x{h}  not found{why}  ({ms:.0f} ms)")
             if written and not quiet:
-                say(f"  wrote {written['overlay']}, {written['accumulator']}")
+                say("  wrote " + ", ".join(written.values()))
     if bar is not None:
         bar.close()
     if n_bad:
@@ -436,7 +477,8 @@ def _import_odometry():
               help="Turn between frames, degrees; LOW = HIGH: known heading change.")
 @click.option("--resume", is_flag=True, help="Continue a run interrupted in the same --out.")
 @click.option("--no-mosaic", is_flag=True, help="Do not build the mosaic.")
-@click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
+@click.option("--quiet", "-q", is_flag=True,
+              help="No progress bar (shown on stderr only when it is a terminal).")
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON object.")
 def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, angle_range,
              resume, no_mosaic, quiet, as_json):
@@ -470,8 +512,8 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
     t0 = time.perf_counter()
     result = run_odometry(list(frames), out, metres_per_pixel=metres_per_pixel,
                           altitude=altitude, focal_px=focal_px, scale_range=scale_range,
-                          angle_range=angle_range, resume=resume, progress=not quiet,
-                          mosaic=not no_mosaic)
+                          angle_range=angle_range, resume=resume,
+                          progress=not quiet and _stderr_is_terminal(), mosaic=not no_mosaic)
     summ = _odometry_summary(result, time.perf_counter() - t0, unit)
     status = 1 if summ["flagged_pairs"] else 0
     if as_json:
@@ -519,14 +561,13 @@ def _imwrite(path: Path, image) -> None:
 def write_simulation(kind: str, out: Path, *, n: int | None = None, seed: int = 0,
                      water: str = "moderate", marker_name: str = "board",
                      size: tuple[int, int] | None = None, path: str = "line",
-                     procedural: bool = False) -> dict:
+                     procedural: bool = False, progress: bool = False) -> dict:
     """Write simulated scenes of ``kind`` and their ``truth.json`` into ``out``.
 
-    Returns the truth dictionary (also written as ``out/truth.json``).
+    ``progress``: a progress bar on stderr (when it is a terminal) for more
+    than one scene or frame. Returns the truth dictionary (also written as
+    ``out/truth.json``).
     """
-    from . import simulate as sim
-    from .geometry import apply_matrix, compose, invert_matrix
-
     out.mkdir(parents=True, exist_ok=True)
     wat = _water_arg(water)
     source = "procedural" if procedural else "auto"
@@ -538,10 +579,35 @@ def write_simulation(kind: str, out: Path, *, n: int | None = None, seed: int = 
                        "pixels (x right, y down), (0, 0) = centre of the top-left pixel; "
                        "angles in degrees counter-clockwise as displayed; matrices are 2x3, "
                        "pattern (or previous-frame) pixel -> scene pixel")}
+    count = n if n is not None else (10 if kind == "sequence" else 1)
+    unit = "frame" if kind == "sequence" else ("pair" if kind == "pair" else "scene")
+    bar = _progress(None, count, "simulate", progress and count > 1, unit=unit)
+    try:
+        _simulate_into(kind, out, truth, count, bar, seed=seed, wat=wat, source=source,
+                       marker_name=marker_name, size=(w, h), path=path)
+    finally:
+        if bar is not None:
+            bar.close()
+    (out / "truth.json").write_text(_dumps(truth, indent=1) + "\n")
+    return truth
+
+
+def _simulate_into(kind, out: Path, truth: dict, count: int, bar, *, seed, wat, source,
+                   marker_name, size, path) -> None:
+    """The scenes of :func:`write_simulation`, written one by one (``bar``
+    ticks per scene or frame written)."""
+    from . import simulate as sim
+    from .geometry import apply_matrix, compose, invert_matrix
+
+    tick = (lambda: None) if bar is None else (lambda: bar.update(1))
+    w, h = size
     if kind == "sequence":
-        count = n if n is not None else 10
+        if bar is not None:
+            bar.set_description("simulate (rendering)")
         frames, mats = sim.sequence(n_frames=count, frame_size=(h, w), path=path, water=wat,
                                     seed=seed, source=source)
+        if bar is not None:
+            bar.set_description("simulate")
         c = np.array([(w - 1) / 2.0, (h - 1) / 2.0])
         rows = []
         for i, (f, m) in enumerate(zip(frames, mats)):
@@ -553,9 +619,9 @@ def write_simulation(kind: str, out: Path, *, n: int | None = None, seed: int = 
             if i:
                 row["motion_from_previous"] = compose(m, invert_matrix(mats[i - 1])).tolist()
             rows.append(row)
+            tick()
         truth.update(path=path, frames=rows)
     else:
-        count = n if n is not None else 1
         scenes = []
         if kind == "marker":
             pat, mask = sim.marker(marker_name)
@@ -589,9 +655,8 @@ def write_simulation(kind: str, out: Path, *, n: int | None = None, seed: int = 
                 scenes.append({"previous": na, "current": nb, "seed": s, **_truth_dict(tr)})
             else:  # pragma: no cover - click restricts the choice
                 raise _Fail(f"unknown kind {kind!r}")
+            tick()
         truth["scenes"] = scenes
-    (out / "truth.json").write_text(_dumps(truth, indent=1) + "\n")
-    return truth
 
 
 @cli.command(no_args_is_help=True)
@@ -612,7 +677,9 @@ def write_simulation(kind: str, out: Path, *, n: int | None = None, seed: int = 
 @click.option("--procedural", is_flag=True,
               help="Procedural seabed backgrounds only (default: real photos when the shared "
               "data folder is present).")
-def simulate(kind, out, count, seed, water, marker_name, size, path_kind, procedural):
+@click.option("--quiet", "-q", is_flag=True,
+              help="No progress bar or hint; only the line saying what was written.")
+def simulate(kind, out, count, seed, water, marker_name, size, path_kind, procedural, quiet):
     """Write synthetic underwater scenes with exact ground truth.
 
     \b
@@ -622,15 +689,22 @@ def simulate(kind, out, count, seed, water, marker_name, size, path_kind, proced
           sequence  frames along a camera path (for `seahough odometry`)
           negative  seabed photos with no marker
     truth.json holds the poses (matrix, x, y, scale, angle), rope angle and
-    offset, or motions, so you can test your own settings.
+    offset, or motions, so you can test your own settings. A progress bar
+    is shown on stderr for several scenes when stderr is a terminal.
     """
     o = Path(out)
+    try:
+        o.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise _Fail(f"--out {out}: cannot create the folder ({e.strerror or e})") from None
     truth = write_simulation(kind, o, n=count, seed=seed, water=water, marker_name=marker_name,
                              size=tuple(size) if size else None, path=path_kind,
-                             procedural=procedural)
+                             procedural=procedural, progress=not quiet)
     n_files = len(truth.get("frames", truth.get("scenes", [])))
     what = "frames" if kind == "sequence" else ("pairs" if kind == "pair" else "scenes")
     click.echo(f"wrote {n_files} {what} and {o / 'truth.json'}")
+    if quiet:
+        return 0
     if kind == "marker":
         click.echo(f"try: {PROG} detect {o / 'pattern.png'} {o / 'marker_*.png'}")
     elif kind == "rope":
@@ -692,7 +766,7 @@ def demo(out, quiet):
         rows_out += [
             ("marker position", f"({d.x:.1f}, {d.y:.1f}) px", f"({tr.x:.1f}, {tr.y:.1f}) px",
              f"{math.hypot(d.x - tr.x, d.y - tr.y):.2f} px"),
-            ("marker angle", f"{d.angle:.2f}°", f"{tr.angle:.2f}°",
+            ("marker angle", f"{format_angle(d.angle)}°", f"{format_angle(tr.angle)}°",
              f"{_angle_err(d.angle, tr.angle):.2f}°"),
             ("marker scale", f"{d.scale:.3f}", f"{tr.scale:.3f}",
              f"{100 * abs(d.scale / tr.scale - 1):.2f} %"),
@@ -715,14 +789,15 @@ def demo(out, quiet):
     written += ["rope_scene.png", "rope_overlay.png", "rope_accumulator.png"]
     if rd is not None:
         rows_out += [
-            ("rope angle", f"{rd.line_angle:.2f}°", f"{rtr.line_angle:.2f}°",
+            ("rope angle", f"{format_angle(rd.line_angle, 2, 180.0)}°",
+             f"{format_angle(rtr.line_angle, 2, 180.0)}°",
              f"{_angle_err(rd.line_angle, rtr.line_angle, 180.0):.2f}°"),
             ("rope offset", f"{rd.line_offset:+.1f} px", f"{rtr.line_offset:+.1f} px",
              f"{abs(rd.line_offset - rtr.line_offset):.2f} px"),
         ]
     else:
         ok = False
-        rows_out.append(("rope", "NOT FOUND", f"{rtr.line_angle:.2f}°", "-"))
+        rows_out.append(("rope", "NOT FOUND", f"{format_angle(rtr.line_angle, 2, 180.0)}°", "-"))
 
     # 3. dead reckoning
     note("demo: seabed sequence and dead reckoning ...")
@@ -743,13 +818,14 @@ def demo(out, quiet):
     if run_odometry is not None:
         odo_dir = o / "odometry"
         result = run_odometry([str(seq_dir)], str(odo_dir), scale_range=(0.9, 1.1),
-                              angle_range=(-20.0, 20.0), progress=not quiet, mosaic=True)
+                              angle_range=(-20.0, 20.0),
+                              progress=not quiet and _stderr_is_terminal(), mosaic=True)
         rows = list(result.rows)
         # x, y: where each frame's centre lies in frame-0 pixels, as the truth
         est = np.array([[np.nan if r.get("x") is None else float(r["x"]),
                          np.nan if r.get("y") is None else float(r["y"])] for r in rows], float)
         plot.plot_trajectory(rows, o / "trajectory.png", truth=true_xy,
-                             title="dead reckoning over 8 simulated frames (dashed: truth)")
+                             title="dead reckoning over 8 simulated frames (grey band: truth)")
         written.append("trajectory.png")
         for name in ("mosaic_path", "trajectory_path", "csv_path"):
             p = getattr(result, name, None)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 import sys
 import tempfile
 import threading
@@ -82,11 +83,46 @@ class _DecoderMessages:
         return False
 
 
+#: OpenCV's log prefix, e.g. ``[ WARN:0@0.518] global grfmt_png.cpp:793 read_from_io``
+_CV_LOG = re.compile(r"^\[\s*(?P<level>[A-Z]+)[^\]]*\]\s*(?:global\s+)?"
+                     r"(?:[\w./\\-]+\.(?:cpp|hpp|cc|c|h):\d+\s+[\w:~<>]+\s*)?")
+#: OpenCV's exception text inside a log line (source path, line, error code)
+_CV_ERROR = re.compile(r"[\s:]*OpenCV\([\d.]+\)\s.*$")
+#: a function name leading a log message, e.g. ``imdecode_('.png'): ``
+_CV_FUNC = re.compile(r"^[A-Za-z_]\w*\([^)]*\)\s*:\s*")
+_LIB_PREFIX = re.compile(r"^(?:lib(?P<lib>png|jpeg|tiff|webp)\s+(?:warning|error)\s*:\s*|"
+                         r"OpenCV\([\d.]+\)\s*)", re.IGNORECASE)
+
+
 def _first_line(text: str) -> str:
+    """The first message the decoders printed, as a clean phrase: without
+    OpenCV's log prefix (level, time, source file and line) or the library's
+    ``libpng warning:``, e.g. ``PNG: image width is zero in IHDR``; debug
+    and info log lines are skipped.
+
+    >>> _first_line("[ WARN:0@0.518] global grfmt_png.cpp:793 read_from_io "
+    ...             "libpng warning: Image width is zero in IHDR\\n")
+    'PNG: image width is zero in IHDR'
+    """
     for line in text.splitlines():
         line = line.strip()
-        if line:
-            return line[:200]
+        m = _CV_LOG.match(line)
+        if m:
+            if m.group("level") in ("INFO", "DEBUG", "VERBOSE", "TRACE"):
+                continue
+            line = _CV_FUNC.sub("", _CV_ERROR.sub("", line[m.end():]))
+        lib = None
+        m = _LIB_PREFIX.match(line)
+        while m:
+            lib = lib or m.group("lib")
+            line = line[m.end():].strip()
+            m = _LIB_PREFIX.match(line)
+        line = " ".join(line.split()).rstrip(".:")
+        if not line:
+            continue
+        if lib:
+            line = f"{lib.upper()}: {line[:1].lower()}{line[1:]}"
+        return line[:160]
     return ""
 
 

@@ -22,6 +22,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 from matplotlib import patheffects
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 
@@ -32,9 +33,14 @@ __all__ = ["plot_detections", "plot_accumulator", "plot_edges", "plot_trajectory
 DPI = 100
 #: Strong colours for detections, best first; they stand out on blue-green water.
 COLOURS = ("#ff2d2d", "#00e5ff", "#ffd60a", "#ff3df2", "#39ff5a", "#ff9500")
+#: The true path in :func:`plot_trajectory` (a band under the estimate).
+TRUTH_COLOUR = "#c4c4c4"
 _OUTLINE = [patheffects.Stroke(linewidth=4.5, foreground="black", alpha=0.8), patheffects.Normal()]
 _TEXT_OUTLINE = [patheffects.withStroke(linewidth=3, foreground="black")]
-_VOTES = "votes (1.0 = one vote per pattern point)"
+#: What the accumulator planes' heights are (see :func:`plot_accumulator`):
+#: votes over the number of pattern points, pooled over 2 x 2 position bins,
+#: so a peak is often above 1; not the 0-1 score of a detection.
+_VOTES = "votes per pattern point (2x2 bins pooled: can exceed 1)"
 _IMAGE_BOX = 900        # longer side of an image drawn by plot_detections, px
 _MARGINS = (75, 25, 45, 55)   # left, right, bottom, top margins around it, px
 _MIN_WIDTH = 560
@@ -42,7 +48,17 @@ _MIN_WIDTH = 560
 
 # --------------------------------------------------------------------------- helpers
 def _figure(width_px: int, height_px: int) -> Figure:
-    return Figure(figsize=(width_px / DPI, height_px / DPI), dpi=DPI)
+    fig = Figure(figsize=(width_px / DPI, height_px / DPI), dpi=DPI)
+    FigureCanvasAgg(fig)        # a renderer, to measure text while laying out
+    return fig
+
+
+def _text_size(fig: Figure, text: str, **props) -> tuple[float, float]:
+    """``(width, height)`` in px of ``text`` drawn with ``props``."""
+    t = fig.text(0, 0, text, **props)
+    bb = t.get_window_extent(fig.canvas.get_renderer())
+    t.remove()
+    return bb.width, bb.height
 
 
 def _finish(fig: Figure, path) -> Figure:
@@ -112,10 +128,16 @@ def _line_ends(x, y, angle_deg, w, h):
 
 
 def _det_label(d) -> str:
+    """``"score 0.87 · conf 0.64 · s 1.23 · 45.0°"`` (angles wrapped after
+    rounding: 359.98 is written 0.0)."""
+    from .cli import format_angle
+
     if getattr(d, "kind", "object") == "line" and d.line_angle is not None:
         return (f"score {d.score:.2f} · conf {d.confidence:.2f} · "
-                f"line {d.line_angle:.1f}° · offset {d.line_offset:+.1f} px")
-    return f"score {d.score:.2f} · conf {d.confidence:.2f} · s {d.scale:.2f} · {d.angle:.1f}°"
+                f"line {format_angle(d.line_angle, 1, 180.0)}° · "
+                f"offset {d.line_offset:+.1f} px")
+    return (f"score {d.score:.2f} · conf {d.confidence:.2f} · s {d.scale:.2f} · "
+            f"{format_angle(d.angle, 1)}°")
 
 
 def _place_label(ax, text, x, y, colour, w, h, above=True):
@@ -145,33 +167,57 @@ def _free_corners(points, w, h) -> list:
     return [int(k) for k in np.argsort(-d, kind="stable")]
 
 
-def _label_list(ax, items, corner: int):
-    """A boxed list of coloured lines in an image corner."""
+_LIST_TEXT = dict(fontsize=10, fontweight="bold")
+_LIST_PAD = 16          # px around the text of a list box (pad, border, rounding)
+_LIST_SEP = 3           # px between its lines
+
+
+def _wrap_label(fig: Figure, text: str, max_w: float) -> str:
+    """``text`` broken at its " · " separators into lines at most ``max_w``
+    px wide (continuation lines indented); a part wider than that alone
+    stays on its own line."""
+    parts = text.split(" · ")
+    lines = [parts[0]]
+    for part in parts[1:]:
+        trial = f"{lines[-1]} · {part}"
+        if _text_size(fig, trial, **_LIST_TEXT)[0] <= max_w:
+            lines[-1] = trial
+        else:
+            lines.append("   " + part)
+    return "\n".join(lines)
+
+
+def _list_size(fig: Figure, items) -> tuple[float, float]:
+    """``(width, height)`` in px of the list box :func:`_label_list` draws."""
+    sizes = [_text_size(fig, t, **_LIST_TEXT) for t, _ in items]
+    return (max(sw for sw, _ in sizes) + _LIST_PAD,
+            sum(sh for _, sh in sizes) + _LIST_SEP * (len(sizes) - 1) + _LIST_PAD)
+
+
+def _label_list(ax, items, corner: int = 1, at=None):
+    """A boxed list of coloured lines: in an image corner, or with its top
+    left corner at ``at`` (figure fraction) when given."""
     from matplotlib.offsetbox import AnchoredOffsetbox, TextArea, VPacker
 
-    rows = [TextArea(t, textprops=dict(color=c, fontsize=10, fontweight="bold")) for t, c in items]
-    box = VPacker(children=rows, align="left", pad=0, sep=3)
-    loc = {0: "upper left", 1: "upper right", 2: "lower right", 3: "lower left"}[corner]
-    anchored = AnchoredOffsetbox(loc=loc, child=box, pad=0.4, borderpad=0.6, frameon=True)
+    rows = [TextArea(t, textprops=dict(color=c, **_LIST_TEXT)) for t, c in items]
+    box = VPacker(children=rows, align="left", pad=0, sep=_LIST_SEP)
+    if at is None:
+        loc = {0: "upper left", 1: "upper right", 2: "lower right", 3: "lower left"}[corner]
+        anchored = AnchoredOffsetbox(loc=loc, child=box, pad=0.4, borderpad=0.6, frameon=True)
+    else:
+        anchored = AnchoredOffsetbox(loc="upper left", child=box, pad=0.4, borderpad=0.0,
+                                     frameon=True, bbox_to_anchor=at,
+                                     bbox_transform=ax.figure.transFigure)
     anchored.patch.set_facecolor("black")
     anchored.patch.set_alpha(0.72)
     anchored.patch.set_edgecolor("white")
     anchored.patch.set_boxstyle("round,pad=0.2")
     ax.add_artist(anchored)
+    return anchored
 
 
-def _pattern_inset(ax, pattern, corner: int):
-    size = 0.2
-    pos = {0: (0.015, 0.955 - size), 1: (0.985 - size, 0.955 - size),
-           2: (0.985 - size, 0.015), 3: (0.015, 0.015)}[corner]
-    img = pattern.image
-    ph, pw = img.shape
-    aspect = pw / ph
-    bw, bh = (size, size / aspect) if aspect >= 1 else (size * aspect, size)
-    x0 = pos[0] + (size - bw if corner in (1, 2) else 0)
-    y0 = pos[1] + (size - bh if corner in (0, 1) else 0)
-    ins = ax.inset_axes([x0, y0, bw, bh])
-    ins.imshow(img, cmap="gray", vmin=0, vmax=255)
+def _draw_pattern(ins, pattern):
+    ins.imshow(pattern.image, cmap="gray", vmin=0, vmax=255)
     for o in getattr(pattern, "outline", []):
         o = np.asarray(o, float)
         closed = getattr(pattern, "closed", True) and len(o) > 2
@@ -184,6 +230,111 @@ def _pattern_inset(ax, pattern, corner: int):
     ins.set_title("pattern", color="white", fontsize=9, pad=2,
                   path_effects=_TEXT_OUTLINE)
     return ins
+
+
+def _pattern_inset(ax, pattern, corner: int):
+    size = 0.2
+    pos = {0: (0.015, 0.955 - size), 1: (0.985 - size, 0.955 - size),
+           2: (0.985 - size, 0.015), 3: (0.015, 0.015)}[corner]
+    ph, pw = pattern.image.shape
+    aspect = pw / ph
+    bw, bh = (size, size / aspect) if aspect >= 1 else (size * aspect, size)
+    x0 = pos[0] + (size - bw if corner in (1, 2) else 0)
+    y0 = pos[1] + (size - bh if corner in (0, 1) else 0)
+    return _draw_pattern(ax.inset_axes([x0, y0, bw, bh]), pattern)
+
+
+def _pattern_beside(fig: Figure, pattern, x0: float, y_top: float, max_w: float):
+    """The pattern in a box of at most ``max_w`` (and 140) px, its top left at
+    (``x0``, ``y_top``) figure px (room left above for its title)."""
+    ph, pw = pattern.image.shape
+    side = min(max_w, 140.0)
+    bw, bh = (side, side * ph / pw) if pw >= ph else (side * pw / ph, side)
+    fw, fh = fig.get_size_inches() * fig.dpi
+    y0 = y_top - 16 - bh
+    return _draw_pattern(fig.add_axes([x0 / fw, y0 / fh, bw / fw, bh / fh]), pattern)
+
+
+def _image_px(shape_wh, box_wh) -> tuple[float, float]:
+    """Size in px of an image of ``shape_wh`` (w, h) drawn in a box of
+    ``box_wh`` px keeping its aspect."""
+    (w, h), (bw, bh) = shape_wh, box_wh
+    s = min(bw / w, bh / h)
+    return w * s, h * s
+
+
+def _fits_beside_object(fig, text, w, h, box_w, box_h) -> bool:
+    """Whether a single detection's boxed label fits across the drawn image."""
+    tw, _ = _text_size(fig, text, **_LIST_TEXT)
+    return tw + _LIST_PAD <= 0.96 * _image_px((w, h), (box_w, box_h))[0]
+
+
+def _notes(fig, ax, detections, pattern, corners, wh, box_wh):
+    """The detection list, the "not found" note and the pattern inset.
+
+    In an image corner when they fit there; next to an image too narrow
+    for them (the image is then drawn on the left and they go in the space
+    on its right); else with the lines wrapped to fit inside the image.
+    """
+    left, _, bottom, _ = _MARGINS
+    fw, fh = fig.get_size_inches() * fig.dpi
+    dw, dh = _image_px(wh, box_wh)
+    n = len(detections)
+    items = [((f"#{i + 1} " if n > 1 else "") + _det_label(d), COLOURS[i % len(COLOURS)])
+             for i, d in enumerate(detections)]
+    lw, lh = _list_size(fig, items) if items else (0.0, 0.0)
+    nf_size = 30
+    nf_w = _text_size(fig, "not found", fontsize=nf_size, fontweight="bold")[0] + 30
+    if n == 1:
+        inside = _fits_beside_object(fig, items[0][0], *wh, *box_wh)
+    elif n > 1:
+        inside = lw <= 0.94 * dw and lh <= 0.6 * dh
+    else:
+        inside = nf_w <= 0.9 * dw
+    x_side = left + dw + 14                     # the image drawn on the left
+    side_w = fw - x_side - 8
+    top_px = bottom + box_wh[1] / 2 + dh / 2    # the image's top edge
+    if not inside and side_w >= 120:
+        ax.set_anchor("W")
+        y = top_px
+        if items:
+            items = [(_wrap_label(fig, t, side_w - _LIST_PAD), c) for t, c in items]
+            _label_list(ax, items, at=(x_side / fw, y / fh))
+            y -= _list_size(fig, items)[1] + 12
+        else:
+            size = nf_size
+            while size > 12 and _text_size(fig, "not found", fontsize=size,
+                                           fontweight="bold")[0] + size > side_w:
+                size -= 2
+            pad = 0.4 * size * DPI / 72             # the box's padding, px
+            fig.text((x_side + pad) / fw, (y - pad) / fh, "not found", ha="left", va="top",
+                     fontsize=size,
+                     fontweight="bold", color="white", path_effects=_TEXT_OUTLINE,
+                     bbox=dict(boxstyle="round,pad=0.4", fc="#b00020", ec="white", alpha=0.8))
+            y -= 2.3 * size * DPI / 72 + 12
+        if pattern is not None:
+            _pattern_beside(fig, pattern, x_side, y, side_w)
+        return
+    if n == 1 and not inside:
+        # no room beside the image: the label wrapped, in a free corner
+        items = [(_wrap_label(fig, items[0][0], 0.94 * dw - _LIST_PAD), items[0][1])]
+        _label_list(ax, items, corners[0])
+        corners = corners[1:]
+    elif n > 1:
+        if not inside:
+            items = [(_wrap_label(fig, t, 0.94 * dw - _LIST_PAD), c) for t, c in items]
+        _label_list(ax, items, corners[0])
+        corners = corners[1:]
+    elif n == 0:
+        size = nf_size
+        while size > 10 and _text_size(fig, "not found", fontsize=size,
+                                       fontweight="bold")[0] + 30 > 0.9 * dw:
+            size -= 2
+        ax.text(0.5, 0.5, "not found", transform=ax.transAxes, ha="center", va="center",
+                fontsize=size, fontweight="bold", color="white", path_effects=_TEXT_OUTLINE,
+                bbox=dict(boxstyle="round,pad=0.4", fc="#b00020", ec="white", alpha=0.8))
+    if pattern is not None:
+        _pattern_inset(ax, pattern, corners[0])
 
 
 # ------------------------------------------------------------------------ detections
@@ -199,13 +350,19 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None) -
         with their closed outline; lines (``kind == "line"``) across the
         whole image along ``line_angle`` through ``(x, y)``, with their two
         borders dashed. Each gets a label
-        ``"score 0.87 · conf 0.64 · s 1.23 · 45.0°"``; an empty list writes
-        "not found" across the image.
+        ``"score 0.87 · conf 0.64 · s 1.23 · 45.0°"`` (angles in [0, 360),
+        lines' in [0, 180), wrapped after rounding): beside a single
+        detection, or, for several, in a numbered list in the image corner
+        farthest from them; an empty list writes "not found" across the
+        image. When an image is too narrow for them (a tall strip), the
+        image is drawn on the left and the labels (wrapped as needed), the
+        note and the pattern go in the space on its right, so that nothing
+        spills onto the axes.
     path : str or Path, optional
         Where to save the PNG.
     pattern : Pattern, optional
         Shown as a small inset (with its outline) in the image corner
-        farthest from the detections.
+        farthest from the detections (or beside a narrow image).
     title : str, optional
         Default: how many detections were found.
 
@@ -254,20 +411,12 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None) -
         else:
             lx, ly = float(np.mean(pts[:, 0])), float(pts[:, 1].min())
         if len(detections) == 1:
-            _place_label(ax, _det_label(d), lx, ly, c, w, h)
+            if _fits_beside_object(fig, _det_label(d), w, h, iw, ih):
+                _place_label(ax, _det_label(d), lx, ly, c, w, h)
         else:
             _place_label(ax, f"#{i + 1}", lx, ly, c, w, h)
     corners = _free_corners(np.vstack(anchors) if anchors else np.empty((0, 2)), w, h)
-    if len(detections) > 1:
-        _label_list(ax, [(f"#{i + 1} " + _det_label(d), COLOURS[i % len(COLOURS)])
-                         for i, d in enumerate(detections)], corners[0])
-        corners = corners[1:]
-    if not detections:
-        ax.text(0.5, 0.5, "not found", transform=ax.transAxes, ha="center", va="center",
-                fontsize=30, fontweight="bold", color="white", path_effects=_TEXT_OUTLINE,
-                bbox=dict(boxstyle="round,pad=0.4", fc="#b00020", ec="white", alpha=0.8))
-    if pattern is not None:
-        _pattern_inset(ax, pattern, corners[0])
+    _notes(fig, ax, detections, pattern, corners, (w, h), (iw, ih))
     if title is None:
         n = len(detections)
         title = "pattern not found" if n == 0 else f"{n} detection{'s' if n > 1 else ''}"
@@ -303,27 +452,126 @@ def _display_angles(angles_deg):
     return a
 
 
-def plot_accumulator(planes, detections=(), path=None, *, title=None) -> Figure:
+def _rotation_edges(planes) -> np.ndarray:
+    """Bin edges of the scale-rotation plane's rotation axis, as displayed."""
+    return _edges_from_centres(_display_angles(planes.angles), single_half=2.5)
+
+
+def scale_angle_marker(planes, scale, angle) -> tuple[float, float]:
+    """``(rotation, scale)`` at which a detection is marked on the
+    scale-rotation plane: the centre of the cell it refers to.
+
+    That is the cell the refined ``scale`` and ``angle`` (degrees) fall in,
+    or, when a neighbouring cell across the nearer border (in rotation, in
+    scale, or both) holds more votes, that one: the refinement moves a pose
+    by up to a cell from its accumulator peak. The rotation axis of a full
+    turn wraps around, so a detection at 359.998 from a peak in the first
+    cell is marked there, at the plane's left edge, not half outside its
+    right edge. On a partial span an angle outside it goes to the nearer
+    end. The rotation returned is in displayed degrees (the plane's x axis,
+    e.g. -17.5..17.5 for a search of -20..20) and is a cell centre, so a
+    marker is never cut by the plane's border.
+
+    Parameters
+    ----------
+    planes : AccumulatorPlanes
+    scale, angle : float
+        The detection's refined scale and rotation (degrees).
+
+    Returns
+    -------
+    (float, float)
+    """
+    centres = _display_angles(planes.angles)
+    edges = _rotation_edges(planes)
+    lo, hi = float(edges[0]), float(edges[-1])
+    n = centres.size
+    full = n > 1 and hi - lo >= 360.0 - 1e-6
+    a = lo + (float(angle) - lo) % 360.0                 # in [lo, lo + 360)
+    if not full and a > hi and (a - hi) > (lo - (a - 360.0)):
+        a -= 360.0                                       # nearer the low end
+    j0 = int(np.clip(np.searchsorted(edges, a, side="right") - 1, 0, n - 1))
+    dj = -1 if a < centres[j0] else 1                    # towards the nearer border
+    log_s = np.log(np.asarray(planes.scales, float))
+    ls = math.log(max(float(scale), 1e-9))
+    k0 = int(np.argmin(np.abs(log_s - ls)))
+    dk = -1 if ls < log_s[k0] else 1
+    sa = np.asarray(planes.scale_angle, float)
+    best, cell = -np.inf, (k0, j0)
+    for k, j in ((k0, j0), (k0, j0 + dj), (k0 + dk, j0), (k0 + dk, j0 + dj)):
+        if full:
+            j %= n                                       # own cell first: it wins ties
+        if 0 <= k < log_s.size and 0 <= j < n and sa[k, j] > best:
+            best, cell = sa[k, j], (k, j)
+    k, j = cell
+    return float(centres[j]), float(planes.scales[k])
+
+
+def _place_peak_labels(ax, marks, ring_px=22):
+    """``#k`` labels beside markers, moved up or down so that none covers
+    another (markers of detections at the same place coincide).
+
+    ``marks``: ``(text, x, y, colour)`` in data coordinates, best first.
+    Returns the annotations."""
+    fig = ax.figure
+    renderer = fig.canvas.get_renderer()
+    ax.apply_aspect()
+    x0, x1 = sorted(ax.get_xlim())
+    placed, out = [], []
+    step = 15.0                                  # points between stacked labels
+    for text, px, py, colour in marks:
+        right = (px - x0) > 0.8 * (x1 - x0)
+        dx = -14 if right else 14
+        ann = ax.annotate(text, (px, py), xytext=(dx, 12), textcoords="offset points",
+                          color=colour, fontsize=11, fontweight="bold",
+                          ha="right" if right else "left", path_effects=_TEXT_OUTLINE,
+                          annotation_clip=False)
+        for k in range(1, 4 * len(marks) + 2):
+            bb = ann.get_window_extent(renderer).expanded(1.0, 1.1)
+            if not any(bb.overlaps(o) for o in placed):
+                break
+            # 12 + 15, 12 - 15 - ring, 12 + 30, ...: above first, then below the ring
+            j = (k + 1) // 2
+            dy = 12 + j * step if k % 2 else 12 - j * step - ring_px
+            ann.set_position((dx, dy))
+        placed.append(ann.get_window_extent(renderer))
+        out.append(ann)
+    return out
+
+
+def plot_accumulator(planes, detections=(), path=None, *, title=None, note=None) -> Figure:
     """The accumulator's two planes, as in the paper's Fig. 4.
 
     Left, *where*: the dx-dy plane (``planes.xy``): for each position of the
     pattern origin (image px), the highest vote over scale and rotation.
     Right, *what size and which way*: the scale-rotation plane
     (``planes.scale_angle``): for each scale and rotation, the highest vote
-    over position. Heights are shares of the pattern's voting points.
-    Detections are circled and numbered in both; with none, the highest
-    cell is marked (a rejected peak).
+    over position. Heights (the colour bars) are votes per pattern point:
+    the pattern's voting points that support a cell (each counts once per
+    translation bin) over their number, summed over a 2 x 2 block of
+    translation bins. 1.0 is as many votes as the pattern has points; the
+    pooling (and, with polarity ``"either"``, both contrasts voting) lets a
+    cell reach 4 (8), and a clear peak is often 1.5-3. They are not a
+    detection's ``score``, the share (0-1) of the pattern's edges found at
+    the refined pose. Detections are circled and numbered in both (labels
+    of markers at the same place are stacked); with none, the highest cell
+    is marked (a rejected peak). In the scale-rotation plane a detection's
+    ring sits on the centre of the cell its peak comes from (see
+    :func:`scale_angle_marker`): the refined pose may lie up to a cell away.
 
     Parameters
     ----------
     planes : AccumulatorPlanes or None
         ``SearchResult.planes`` from :meth:`seahough.Detector.search`; None
-        (an image without edges) draws a note instead.
+        (the search stopped before voting) draws a note instead.
     detections : list of Detection
     path : str or Path, optional
         Where to save the PNG.
     title : str, optional
         A line above both panels.
+    note : str, optional
+        Why there are no planes (``SearchResult.note``), for that note;
+        default: the image has no edges.
 
     Returns
     -------
@@ -337,8 +585,9 @@ def plot_accumulator(planes, detections=(), path=None, *, title=None) -> Figure:
     if planes is None:
         ax = fig.add_axes([0, 0, 1, 1])
         ax.axis("off")
-        ax.text(0.5, 0.5, "no accumulator: the image has (almost) no edges to vote",
-                ha="center", va="center", fontsize=16)
+        why = note if note and note != "no edges" else \
+            "the image has (almost) no edges to vote"
+        ax.text(0.5, 0.5, f"no accumulator: {why}", ha="center", va="center", fontsize=16)
         return _finish(fig, path)
     top = 0.86 if title else 0.9
     ax1 = fig.add_axes([0.06, 0.1, 0.36, top - 0.1])
@@ -357,7 +606,7 @@ def plot_accumulator(planes, detections=(), path=None, *, title=None) -> Figure:
 
     sa = np.asarray(planes.scale_angle, float)
     ang = _display_angles(planes.angles)
-    a_edges = _edges_from_centres(ang, single_half=2.5)
+    a_edges = _rotation_edges(planes)
     s_edges = _edges_from_centres(planes.scales, log=True, single_half=0.03)
     smax = float(sa.max()) if sa.size and sa.max() > 0 else 1.0
     mesh = ax2.pcolormesh(a_edges, s_edges, sa, cmap="inferno", vmin=0, vmax=smax, shading="flat")
@@ -369,20 +618,15 @@ def plot_accumulator(planes, detections=(), path=None, *, title=None) -> Figure:
     ax2.set_xlim(a_edges[0], a_edges[-1])
     ax2.set_ylim(s_edges[0], s_edges[-1])
 
-    def in_display(a):
-        return a_edges[0] + ((a - a_edges[0]) % 360.0)
-
+    marks1, marks2 = [], []
     for i, d in enumerate(detections):
         c = COLOURS[i % len(COLOURS)]
-        lab = f"#{i + 1}"
-        a = in_display(d.angle)
-        for ax, px, py in ((ax1, d.x, d.y), (ax2, a, d.scale)):
+        a, sc = scale_angle_marker(planes, d.scale, d.angle)
+        for ax, marks, px, py in ((ax1, marks1, d.x, d.y), (ax2, marks2, a, sc)):
             _ring(ax, px, py, c)
-            lim = ax.get_xlim()
-            right = (px - min(lim)) > 0.8 * abs(lim[1] - lim[0])
-            ax.annotate(lab, (px, py), xytext=(-14 if right else 14, 12),
-                        textcoords="offset points", color=c, fontsize=11, fontweight="bold",
-                        ha="right" if right else "left", path_effects=_TEXT_OUTLINE)
+            marks.append((f"#{i + 1}", px, py, c))
+    _place_peak_labels(ax1, marks1)
+    _place_peak_labels(ax2, marks2)
     if not detections and xy.size and xy.max() > 0:
         r, c = np.unravel_index(int(np.argmax(xy)), xy.shape)
         ax1.plot([planes.x[c]], [planes.y[r]], "x", ms=14, mew=2.5, color="white")
@@ -439,7 +683,8 @@ def plot_edges(image, features=None, path=None, *, config=None, title=None) -> F
     ax1.imshow(g.image, cmap="gray", vmin=0, vmax=255)
     ax1.set_title(f"working image ({w} x {h} px, factor {g.factor:.2f})", fontsize=11)
     vmax = float(np.percentile(mag, 99.5)) if mag.size else 1.0
-    im = ax2.imshow(mag, cmap="gray", vmin=0, vmax=max(vmax, 1e-6))
+    # a flat image: a plain 0-1 scale rather than a 1e-6 one
+    im = ax2.imshow(mag, cmap="gray", vmin=0, vmax=vmax if vmax >= 1.0 else 1.0)
     cb = fig.colorbar(im, cax=cax)
     cb.set_label("Scharr gradient magnitude (clipped at 99.5 %)")
     seg = features.segments
@@ -495,7 +740,9 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
     unit : str
         Unit of ``x``, ``y`` for the axis labels (``"px"``, ``"m"``).
     truth : (N, 2) array, optional
-        The true positions, drawn thin, black and dashed over the estimate.
+        The true positions: a wide light grey band with a ring at each
+        position, under the estimate (the estimate shows inside the band
+        where both agree, and the band beside it where they do not).
     title : str, optional
 
     Notes
@@ -520,9 +767,13 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
     flagged = np.array([bool(r.get("flags")) for r in rows], bool)
     if truth is not None:
         t = np.asarray(truth, float).reshape(-1, 2)
-        # on top of the estimate, thin and dashed, so both show where they agree
-        ax.plot(t[:, 0], t[:, 1], ls=(0, (5, 3)), color="black", lw=1.3, label="truth",
-                zorder=3.5)
+        # under the estimate, wide and light, a ring at each true position: the
+        # thin estimate shows inside it where both agree, beside it where not
+        ax.plot(t[:, 0], t[:, 1], "-", color=TRUTH_COLOUR, lw=9, alpha=0.85,
+                solid_capstyle="round", solid_joinstyle="round", zorder=1.5)
+        ax.plot(t[:, 0], t[:, 1], "o", ms=9, mfc="none", mec="#5a5a5a", mew=1.2, zorder=1.6)
+        ax.plot([], [], "-o", color=TRUTH_COLOUR, lw=6, ms=9, mfc="none", mec="#5a5a5a",
+                label="truth")
     if ok.any():
         ax.plot(xs[ok], ys[ok], "-", color="#1f5fbf", lw=2.2, label="dead reckoning")
         ax.plot(xs[ok], ys[ok], ".", color="#1f5fbf", ms=6)
