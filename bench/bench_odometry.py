@@ -81,11 +81,17 @@ def _stats(res, cpu, wall, n):
     prior = [_TIMES[r["index"]] for r in rows if r["method"] == "prior" and r["index"] in _TIMES]
     pc = [p[0] for p in prior]
     pw = [p[1] for p in prior]
+    # pairs on the prior whose keyframe was already in use for the previous frame (its
+    # pattern built): the others build the new keyframe's pattern first
+    kept = [_TIMES[r["index"]][0] for q, r in zip(res.rows, rows)
+            if r["method"] == "prior" and r["index"] in _TIMES and r["ref"] == q.get("ref")]
     return {
         "frames": n,
         "prior_share": len(prior) / max(len(rows), 1),
         "prior_median": float(np.median(pc)) if pc else math.nan,
         "prior_p90": float(np.percentile(pc, 90)) if pc else math.nan,
+        "prior_new_key": len(pc) - len(kept),
+        "prior_p90_kept": float(np.percentile(kept, 90)) if kept else math.nan,
         "prior_wall": float(np.median(pw)) if pw else math.nan,
         "mean_all": 1000.0 * cpu / max(n, 1),
         "mean_wall": 1000.0 * wall / max(n, 1),
@@ -176,12 +182,23 @@ def main(argv=None):
               f"{st['prior_median']:.1f}, {st['prior_p90']:.1f} [{st['prior_wall']:.1f}] | "
               f"{st['mean_all']:.1f} [{st['mean_wall']:.1f}] | "
               f"{st['keyframes']} | {st['flagged']} | {drift} |")
-    ok = [st["prior_median"] for label, size, st in table if size == "640x480"]
-    if ok:
-        verdict = "meets" if max(ok) <= TARGET_MS else "misses"
-        print(f"\n640x480 with the prior: median {min(ok):.1f}-{max(ok):.1f} CPU ms per pair "
-              f"({verdict} the {TARGET_MS:.0f} ms target)")
-
+    rows = [(label, st) for label, size, st in table if size == "640x480"]
+    if rows:
+        med = [st["prior_median"] for _, st in rows]
+        verdict = "meets" if max(med) <= TARGET_MS else "misses"
+        print(f"\n640x480 with the prior, against the {TARGET_MS:.0f} ms target: median "
+              f"{min(med):.1f}-{max(med):.1f} CPU ms per pair ({verdict} it in every row"
+              + ("" if verdict == "meets" else
+                 f": misses in {sum(m > TARGET_MS for m in med)} of {len(med)}") + ").")
+        late = [(label, st) for label, st in rows if st["prior_p90"] > TARGET_MS]
+        per_row = "; ".join(
+            f"{label} {st['prior_p90']:.1f} ms "
+            f"({'misses' if st['prior_p90'] > TARGET_MS else 'meets'}; "
+            f"{st['prior_p90_kept']:.1f} ms without the {st['prior_new_key']} pairs that first "
+            "build a new keyframe's pattern)" for label, st in rows)
+        print(f"90th percentile per row: {per_row}. "
+              + (f"At the 90th percentile the target is missed in {len(late)} of {len(rows)} "
+                 "rows." if late else "The 90th percentile meets the target in every row."))
 
 if __name__ == "__main__":
     main()

@@ -63,6 +63,98 @@ def _write_frames(frames, folder: Path, prefix="frame_"):
     return paths
 
 
+def _hp(gray, sigma=2.0):
+    """High-pass (the image minus its Gaussian blur): fine texture, not
+    brightness or vignetting, so a correlation of two views depends on
+    their registration to a pixel or two."""
+    g = np.asarray(gray, np.float32)
+    return g - cv2.GaussianBlur(g, (0, 0), sigma)
+
+
+def _find_subpixel(image, patch):
+    """Top-left of ``patch`` in ``image`` (normalised correlation, peak refined
+    to a fraction of a pixel by a parabola through its neighbours)."""
+    r = cv2.matchTemplate(image, patch, cv2.TM_CCOEFF_NORMED)
+    _, _, _, (px, py) = cv2.minMaxLoc(r)
+
+    def refine(a, b, c):
+        d = a - 2 * b + c
+        return 0.0 if d >= 0 else 0.5 * (a - c) / d
+
+    fx = refine(*r[py, px - 1: px + 2]) if 0 < px < r.shape[1] - 1 else 0.0
+    fy = refine(*r[py - 1: py + 2, px]) if 0 < py < r.shape[0] - 1 else 0.0
+    return px + fx, py + fy
+
+
+_OFFSETS = ((0.0, 0.0), (3.0, 0.0), (-3.0, 0.0), (0.0, 3.0), (0.0, -3.0))
+
+
+def _mosaic_placement(mosaic, frames, rows):
+    """Is every frame in the mosaic where the trajectory puts it?
+
+    The mosaic takes each pixel from the frame that saw it nearest to that
+    frame's centre (odometry._build_mosaic), so each frame has a cell of the
+    mosaic that should hold its own pixels: the cells are computed from the
+    trajectory (the rows' ``matrix``). Frame 0 is located in the mosaic (the
+    canvas origin); then each frame is compared with the mosaic over its
+    cell, sampled where the trajectory places it and 3 px beside (4
+    directions, frame-0 pixels). Returns, per frame, (coverage: share of the
+    cell the mosaic filled, [high-pass normalised correlation at each of
+    _OFFSETS]). Correctly placed: the cell filled and the correlation peaks
+    at offset (0, 0); a frame left out or put elsewhere leaves its cell
+    black or holding other content; a frame 3 px off correlates better 3 px
+    beside."""
+    gm = cv2.cvtColor(mosaic, cv2.COLOR_BGR2GRAY)
+    g0 = cv2.cvtColor(frames[0], cv2.COLOR_BGR2GRAY)
+    h, w = g0.shape
+    x, y = _find_subpixel(gm, g0[h // 4: 3 * h // 4, w // 4: 3 * w // 4])
+    gmf = gm.astype(np.float32)
+    yy, xx = np.mgrid[0:h, 0:w]
+    pix = np.stack([xx.ravel(), yy.ravel()], 1).astype(float)
+    c = np.array([(w - 1) / 2.0, (h - 1) / 2.0])
+    mats = [np.asarray(r["matrix"]).reshape(2, 3) for r in rows]
+
+    def centre_distance(p):     # as the mosaic's, infinite outside the frame
+        d = ((p[:, 0] - c[0]) / w) ** 2 + ((p[:, 1] - c[1]) / h) ** 2
+        d[(p[:, 0] < 0) | (p[:, 1] < 0) | (p[:, 0] > w - 1) | (p[:, 1] > h - 1)] = np.inf
+        return d
+
+    out = []
+    for i, f in enumerate(frames):
+        to_0 = invert_matrix(mats[i])                       # frame i px -> frame-0 px
+        others = np.full(len(pix), np.inf)
+        for j, m in enumerate(mats):
+            if j != i:
+                others = np.minimum(others, centre_distance(apply_matrix(compose(m, to_0), pix)))
+        cell = (centre_distance(pix) < others).reshape(h, w).astype(np.uint8)
+        cell = cv2.erode(cell, np.ones((5, 5), np.uint8)) > 0
+        assert cell.sum() > 2000, "each frame of the test sequence must own a part of the mosaic"
+        hf = _hp(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY))
+        coverage, nccs = None, []
+        for dx, dy in _OFFSETS:
+            to_canvas = np.array([[1.0, 0.0, x - w // 4 + dx], [0.0, 1.0, y - h // 4 + dy]])
+            back = cv2.warpAffine(gmf, compose(to_canvas, to_0), (w, h),
+                                  flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderValue=0.0)
+            filled = cell & (back > 0)
+            if coverage is None:
+                coverage = float(filled.sum() / cell.sum())
+            if filled.sum() < 500:
+                nccs.append(0.0)
+                continue
+            a, b = hf[filled], _hp(back)[filled]
+            a, b = a - a.mean(), b - b.mean()
+            nccs.append(float((a * b).sum() / math.sqrt((a * a).sum() * (b * b).sum())))
+        out.append((coverage, nccs))
+    return out
+
+
+def _mosaic_is_registered(placement):
+    """Every frame's cell filled, and its correlation there clear and highest
+    where the trajectory puts it (not 3 px beside)."""
+    return all(cov > 0.9 and n[0] > 0.25 and n[0] > max(n[1:]) + 0.05
+               for cov, n in placement)
+
+
 def _csv_without_timing(path):
     with open(path, newline="") as f:
         rows = list(csv.DictReader(f))
@@ -129,15 +221,16 @@ def test_outputs_metric_and_mosaic(tmp_path):
     assert res.rows[0]["x_m"] == 0.0 and res.rows[0]["y_m"] == 0.0
     assert summary["settings"]["metres_per_pixel"] == pytest.approx(mpp)
     assert summary["mean_ms_per_frame"] > 0
-    # the mosaic: every frame placed where the trajectory says, so it holds the
-    # frames' content: frame 0 is found at its place, sharp (not a blend)
+    # the CSV read back holds the same metric columns (plain numbers)
+    back = read_odometry_csv(res.csv_path)
+    assert len(back) == 10 and back[-1]["x_m"] == pytest.approx(summary["end_point"]["x_m"])
+    # the mosaic: every frame where the trajectory places it (relative to frame
+    # 0), sharp: its fine texture matches the frame's there (a frame misplaced by
+    # 3 px, or left at frame 0's place, or mirrored, fails: see _mosaic_placement)
     mosaic = cv2.imread(str(res.mosaic_path))
     assert mosaic is not None and min(mosaic.shape[:2]) >= SHAPE[0]
-    g0 = cv2.cvtColor(frames[0], cv2.COLOR_BGR2GRAY)
-    gm = cv2.cvtColor(mosaic, cv2.COLOR_BGR2GRAY)
-    patch = g0[80:160, 100:220]
-    score = cv2.matchTemplate(gm, patch, cv2.TM_CCOEFF_NORMED).max()
-    assert score > 0.9
+    placement = _mosaic_placement(mosaic, frames, res.rows)
+    assert _mosaic_is_registered(placement), placement
 
 
 def test_metres_per_pixel_needs_both_altitude_and_focal(tmp_path):
@@ -146,6 +239,41 @@ def test_metres_per_pixel_needs_both_altitude_and_focal(tmp_path):
         run_odometry(frames, tmp_path, altitude=2.0, progress=False)
     with pytest.raises(seahough.ParameterError, match="scale_range"):
         run_odometry(frames, tmp_path, scale_range=(1.1, 0.9), progress=False)
+    # metres_per_pixel and altitude/focal_px are two ways of saying one thing:
+    # both given is refused (as the CLI does), naming both, not one silently preferred
+    for extra in ({"altitude": 2.0, "focal_px": 400.0}, {"altitude": 2.0}, {"focal_px": 400.0}):
+        with pytest.raises(seahough.ParameterError) as e:
+            run_odometry(frames, tmp_path / "both", metres_per_pixel=0.004, progress=False,
+                         **extra)
+        assert "metres_per_pixel" in str(e.value) and "altitude" in str(e.value)
+        assert "not both" in str(e.value)
+    assert not (tmp_path / "both" / "odometry.csv").exists()    # refused before any work
+
+
+def test_metres_per_pixel_scales_the_track(tmp_path):
+    frames, mats = _sequence("turn", n=8, seed=11)
+    mpp = 0.0037
+    res = run_odometry(frames, tmp_path / "m", metres_per_pixel=mpp, progress=False,
+                       mosaic=False)
+    px = run_odometry(frames, tmp_path / "px", progress=False, mosaic=False)
+    x0, y0 = res.rows[0]["x"], res.rows[0]["y"]
+    assert (res.rows[0]["x_m"], res.rows[0]["y_m"]) == (0.0, 0.0)
+    for r, q in zip(res.rows, px.rows):
+        assert (r["x"], r["y"]) == (q["x"], q["y"])           # the pixels do not change
+        assert r["x_m"] == pytest.approx((r["x"] - x0) * mpp, abs=1e-12)
+        assert r["y_m"] == pytest.approx((r["y"] - y0) * mpp, abs=1e-12)
+        assert "x_m" not in q
+    assert res.summary["settings"]["metres_per_pixel"] == mpp
+    assert res.summary["path_length_m"] == pytest.approx(px.summary["path_length_px"] * mpp)
+    assert res.summary["unit"] == "m" and px.summary["unit"] == "px"
+    # the end point in metres against the truth (the camera moved ~90 px, ~0.33 m)
+    xy, _ = _true_track(mats)
+    true_end = (xy[-1] - xy[0]) * mpp
+    end = np.array([res.rows[-1]["x_m"], res.rows[-1]["y_m"]])
+    assert np.hypot(*true_end) > 0.25
+    assert np.hypot(*(end - true_end)) < 3.0 * mpp
+    with open(res.csv_path, newline="") as f:
+        assert next(csv.reader(f))[9:11] == ["x_m", "y_m"]
 
 
 def test_frame_order_and_timestamps(tmp_path):
@@ -153,13 +281,18 @@ def test_frame_order_and_timestamps(tmp_path):
         cv2.imwrite(str(tmp_path / name), np.zeros((16, 16), np.uint8))
     assert [Path(p).name for p in list_frames(tmp_path)] == ["f1.png", "f2.png", "f10.png"]
     assert [Path(p).name for p in list_frames([str(tmp_path)])] == ["f1.png", "f2.png", "f10.png"]
+    # names whose order (camA, camB, camC) disagrees with their times: sorted by time
     ts = tmp_path / "ts"
     ts.mkdir()
-    for name in ("cam_20240210_134117.500.png", "cam_20240210_134109.000.png",
-                 "cam_20240210_134200.000.png"):
+    names = ("camB_20240210_134109.000.png", "camA_20240210_134117.500.png",
+             "camC_20240210_134100.000.png")
+    for name in names:
         cv2.imwrite(str(ts / name), np.zeros((16, 16), np.uint8))
-    assert [Path(p).name[4:19] for p in list_frames(ts)] == [
-        "20240210_134109", "20240210_134117", "20240210_134200"]
+    assert sorted(names) != [names[2], names[0], names[1]]        # (the test is not blind)
+    assert [Path(p).name for p in list_frames(ts)] == [names[2], names[0], names[1]]
+    # one name without a time: natural name order for the whole folder
+    cv2.imwrite(str(ts / "camD.png"), np.zeros((16, 16), np.uint8))
+    assert [Path(p).name for p in list_frames(ts)] == sorted(names) + ["camD.png"]
     assert time_from_name("frame_00_00_21.000.jpg") == 21.0
     assert time_from_name("1372687208.6337876.png") == pytest.approx(1372687208.6337876)
     assert time_from_name("frame_000123.png") is None
@@ -184,6 +317,23 @@ def test_video_file_and_grey_16bit_frames(tmp_path):
     xy, _ = _true_track(mats)
     est = np.array([[r["x"], r["y"]] for r in res.rows])
     assert np.hypot(*(est[-1] - xy[-1])) < 3.0
+    # several videos in one list: each one's frames in turn, in the order given
+    video2 = tmp_path / "dive2.avi"
+    vw = cv2.VideoWriter(str(video2), cv2.VideoWriter_fourcc(*"MJPG"), 5.0, SHAPE[::-1])
+    for f in frames[:3]:
+        vw.write(f)
+    vw.release()
+    both = list_frames([str(video2), str(video)])
+    assert both == [f"{video2}#{i}" for i in range(3)] + [f"{video}#{i}" for i in range(8)]
+    two = run_odometry([str(video), str(video2)], tmp_path / "v2", progress=False, mosaic=False)
+    assert [r["file"] for r in two.rows] == [f"{video}#{i}" for i in range(8)] + [
+        f"{video2}#{i}" for i in range(3)]
+    assert all(r["status"] != "unreadable" for r in two.rows)
+    assert two.rows[7]["x"] == pytest.approx(res.rows[7]["x"])   # the first video as alone
+    bad = tmp_path / "broken.avi"
+    bad.write_bytes(b"not a video")
+    with pytest.raises(seahough.ParameterError, match="broken.avi: (cannot open|.*no frame)"):
+        list_frames([str(video), str(bad)])
     # the same frames as 16-bit grey PNG files
     d = tmp_path / "grey16"
     d.mkdir()
@@ -248,6 +398,126 @@ def test_unrelated_frame_is_flagged_not_invented(tmp_path):
     xy, _ = _true_track(mats)
     est = np.array([[q["x"], q["y"]] for q in res.rows])
     assert np.hypot(*(est[-1] - xy[-1])) < 3.0   # frame 7 was measured against the keyframe
+
+
+def _errors(res, mats, keep):
+    """Distance (px) of each row's position from the truth of the frame it shows."""
+    xy, _ = _true_track(mats)
+    return [math.hypot(r["x"] - xy[k][0], r["y"] - xy[k][1]) for r, k in zip(res.rows, keep)]
+
+
+def test_a_jump_the_prior_cannot_explain_falls_back_to_the_full_search(tmp_path):
+    # frames 6-8 of a 12 px/frame line dropped: a 48 px step where the prior
+    # (the last motion, +-5 % of the frame around it) expects 12 px
+    frames, mats = _sequence("line", n=16, seed=0)
+    keep = [0, 1, 2, 3, 4, 5, 9, 10, 11, 12, 13, 14]
+    res = run_odometry([frames[k] for k in keep], tmp_path, progress=False, mosaic=False)
+    methods = [r["method"] for r in res.rows]
+    assert methods[2:6] == ["prior"] * 4            # the prior at work before the jump
+    assert methods[6] == "full"                     # the jump: the full search, on the keyframe
+    assert res.rows[6]["ref"] == 0 and res.rows[6]["status"] == "measured"
+    assert methods[-3:] == ["prior"] * 3            # and the prior again once it has the motion
+    assert res.summary["flagged_pairs"] == 0
+    assert max(_errors(res, mats, keep)) < 2.0      # the track stays on the truth
+
+
+def test_after_a_scene_change_the_previous_frame_takes_over(tmp_path):
+    # the camera is suddenly somewhere else (scene B): B's first frame cannot be
+    # measured against the keyframe (scene A) and is flagged; B's second frame
+    # cannot be either, but it can against the previous frame (B's first), which
+    # then becomes the keyframe, and the track goes on with B's motion. (A jump
+    # the keyframe can no longer see but the previous frame can also takes this
+    # path, but only in a narrow band of overlaps that depends on the search's
+    # tuning: the keyframe is kept while the next frame overlaps it by 60 %.)
+    a, _ = _sequence("line", n=6, seed=0)
+    b, mats_b = S.sequence(None, n_frames=5, frame_size=SHAPE, path="line", step=12.0,
+                           seed=21, source="procedural")
+    res = run_odometry(list(a) + list(b), tmp_path, progress=False, mosaic=False)
+    rows = res.rows
+    assert [r["status"] for r in rows[:6]] == ["origin"] + ["measured"] * 5
+    assert rows[6]["status"] == "assumed" and "pose_assumed" in rows[6]["flags"]
+    assert (rows[7]["status"], rows[7]["method"], rows[7]["ref"]) == ("measured", "previous", 6)
+    assert rows[8]["ref"] == 6                      # B's first frame: the keyframe now
+    assert all(r["status"] == "measured" for r in rows[8:])
+    assert res.summary["methods"]["previous"] == 1 and res.summary["flagged_pairs"] == 1
+    # B's motion, from its first frame (where the track was left), matches its truth
+    for k in range(1, 5):
+        est = compose(np.asarray(rows[6 + k]["matrix"]).reshape(2, 3),
+                      invert_matrix(np.asarray(rows[6]["matrix"]).reshape(2, 3)))
+        c = [[(SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0]]
+        assert np.hypot(*(apply_matrix(est, c) - apply_matrix(mats_b[k], c))[0]) < 1.5
+
+
+def _banded_frames(folder: Path, jumps):
+    """Frames of a scene whose only texture is a band of rows (elsewhere a smooth
+    gradient, no edges): frame 0 at the top, then two unreadable frames (so the
+    search covers 3 frames of motion), then one frame per ``jumps`` (rows down).
+    Frame 0's edges all lie in its rows 195-240: a frame ``j`` rows down sees
+    them in its top 240 - j rows."""
+    h, w = SHAPE
+    yy, xx = np.mgrid[0:h + 300, 0:w].astype(np.float32)
+    scene = 90 + 0.25 * xx + 0.08 * yy
+    tex = S.seabed((h + 300, w), seed=3)
+    tex = cv2.cvtColor(tex, cv2.COLOR_BGR2GRAY) if tex.ndim == 3 else tex
+    scene[195:240] = tex[195:240]
+    scene = np.clip(scene, 0, 255).astype(np.uint8)
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for i, j in enumerate([0, None, None, *jumps]):
+        p = folder / f"f{i}.png"
+        if j is None:
+            p.write_bytes(b"lost")
+        else:
+            cv2.imwrite(str(p), scene[j:j + h])
+        paths.append(str(p))
+    return paths
+
+
+@pytest.mark.parametrize("jump, measured", [(190, True), (205, False)])
+def test_too_little_overlap_is_flagged(tmp_path, jump, measured):
+    # the same edges seen in 50 rows of the frame (21 %): measured; in 35 rows
+    # (15 % of the frame, 13 % once cropped): found, confidently, but refused
+    paths = _banded_frames(tmp_path / "f", [jump])
+    res = run_odometry(paths, tmp_path / "o", progress=False, mosaic=False)
+    r = res.rows[3]
+    if measured:
+        assert (r["status"], r["method"], r["flags"]) == ("measured", "full", "")
+        assert r["overlap"] < 0.25
+        assert r["y"] - res.rows[0]["y"] == pytest.approx(jump, abs=1.0)
+    else:
+        assert r["status"] == "assumed"
+        assert r["flags"] == "little_overlap; pose_assumed: zero motion since frame 0"
+        assert (r["x"], r["y"]) == (res.rows[0]["x"], res.rows[0]["y"])
+        assert res.summary["assumed_poses"] == 1
+
+
+def test_a_long_run_keeps_no_state_per_frame(tmp_path, monkeypatch):
+    # a survey of 100,000 photos must not hold 100,000 rows: count the live
+    # (garbage-collected) Python objects as the run goes, with a loop of frames
+    # on disk listed over and over (the camera circles the same ground)
+    import gc
+    import seahough.odometry as O
+    frames, _ = _sequence("loop", n=24, seed=12)
+    paths = _write_frames(frames, tmp_path / "loop")
+    seq = [paths[i % len(paths)] for i in range(150)]
+    counts = {}
+    advance = O._advance
+
+    def counting(st, row):
+        advance(st, row)
+        if row["index"] in (49, 149):
+            gc.collect()
+            counts[row["index"]] = len(gc.get_objects())
+
+    monkeypatch.setattr(O, "_advance", counting)
+    res = run_odometry(seq, tmp_path / "o", progress=False, mosaic=True)
+    # (a row kept per frame was 3 objects: the dict and its two matrix lists)
+    assert counts[149] - counts[49] < 30, counts
+    assert res.summary["frames"] == 150 and res.summary["measured_pairs"] >= 140
+    # the rows are still there when asked for: read back from the CSV
+    assert res.rows == read_odometry_csv(res.csv_path) and len(res.rows) == 150
+    assert res.summary["end_point"]["x"] == res.rows[-1]["x"]
+    assert cv2.imread(str(res.mosaic_path)) is not None
 
 
 # --------------------------------------------------------------------------- resume
@@ -345,46 +615,131 @@ def test_real_sequence_end_to_end(real_runs, name):
         assert res.rows[1]["time"] - res.rows[0]["time"] == pytest.approx(1.0)
 
 
-def _sparus_truth(folder: Path, n_frames: int):
-    """Heading change (deg, counter-clockwise as displayed) and travel direction
-    (unit vector in frame-0 pixels) from the pose CSV, at the frames' times.
+def _quat_matrix(x, y, z, w):
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
-    The poses follow ROS conventions: world x east, y north, z up (z = -13.8 m
-    is the depth); the camera frame is the vehicle's x forward (= up in the
-    image), y left (= left in the image), z up (out of the image). Frame i was
-    taken at offset + i / 4.9988 s (MANIFEST.tsv); the poses change every
-    ~0.35 s and are interpolated linearly between changes.
-    """
+
+def _sparus_poses(folder: Path, reading="world->camera"):
+    """Times, rotations world -> camera and camera centres of the distinct poses.
+
+    The CSV (``source world, target camera``, MANIFEST.tsv: "world->camera")
+    holds the world -> camera transform, ``p_cam = R p_world + t``, quaternion
+    x, y, z, w; the camera centre is ``C = -R^T t``. World z points down (C_z
+    = +13.9 m, the depth) and the camera frame is the optical one: x right in
+    the image, y down, z towards the seabed. (``reading="camera-in-world"``:
+    the same numbers read as the camera's pose in the world, ``C = t`` and R
+    camera -> world, for the test that this wrong reading fails.) The CSV
+    repeats each pose at 10 Hz until the next one (~every 0.35 s): only the
+    changes are kept."""
+    rows = list(csv.DictReader(open(folder / "camera_poses_sparus_snippet.csv", newline="")))
+    keys = []
+    for r in rows:
+        v = tuple(float(r[k]) for k in ("x", "y", "z", "qx", "qy", "qz", "qw"))
+        if not keys or keys[-1][1] != v:
+            keys.append((float(r["ts"]), v))
+    ts = np.array([k[0] for k in keys])
+    t = np.array([k[1][:3] for k in keys])
+    rot = [_quat_matrix(*k[1][3:]) for k in keys]
+    if reading == "world->camera":
+        return ts, rot, np.array([-r.T @ v for r, v in zip(rot, t)])
+    return ts, [r.T for r in rot], t
+
+
+def _rotation_at(ts, rots, t):
+    """Rotation at time ``t``: turned from the pose before towards the next one
+    in proportion to the time (clamped to the span)."""
+    t = min(max(t, ts[0]), ts[-1])
+    j = min(int(np.searchsorted(ts, t, side="right")) - 1, len(ts) - 2)
+    a = (t - ts[j]) / (ts[j + 1] - ts[j])
+    rv, _ = cv2.Rodrigues(rots[j + 1] @ rots[j].T)
+    step, _ = cv2.Rodrigues(rv * a)
+    return step @ rots[j]
+
+
+def _sparus_comparison(rows, folder: Path, reading="world->camera", axes="optical",
+                       window=15):
+    """The Sparus odometry against its poses: heading change, and direction
+    of travel over ``window``-pair windows (15 pairs = 3 s).
+
+    Frame i was taken at the video start (sparus_time_offset.yaml) + i /
+    4.9988 s (MANIFEST.tsv). Direction of travel: where frame k+window's
+    centre lies in frame k's pixels (from the odometry's matrices) against
+    the camera's displacement in camera k's axes, R_k (C_k+window - C_k),
+    whose (x, y) are image (right, down) for the optical camera frame
+    (``axes="body"``: x = image up, y = image left, the vehicle convention
+    an earlier version of this test assumed). Windows start and end inside
+    the pose span. Returns the heading change of both over the whole run
+    (degrees counter-clockwise as displayed), the signed direction
+    differences (odometry - poses), their circular mean (one fixed offset)
+    and the largest deviation from it."""
     offset = float((folder / "sparus_time_offset.yaml").read_text().split(":", 1)[1])
-    with open(folder / "camera_poses_sparus_snippet.csv", newline="") as f:
-        rows = list(csv.DictReader(f))
-    t = np.array([float(r["ts"]) for r in rows])
-    p = np.array([[float(r[k]) for k in ("x", "y")] for r in rows])
-    q = np.array([[float(r[k]) for k in ("qx", "qy", "qz", "qw")] for r in rows])
-    change = [0] + [i for i in range(1, len(rows))
-                    if not (np.allclose(p[i], p[i - 1]) and np.allclose(q[i], q[i - 1]))]
-    x, y, z, w = q[change].T
-    yaw = np.unwrap(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
-    ft = offset + np.array([0, n_frames - 1]) / 4.9988
-    yaw_f = np.interp(ft, t[change], yaw)
-    px = np.interp(ft, t[change], p[change, 0])
-    py = np.interp(ft, t[change], p[change, 1])
-    d = np.array([px[1] - px[0], py[1] - py[0]])
-    fwd = d @ [math.cos(yaw_f[0]), math.sin(yaw_f[0])]
-    left = d @ [-math.sin(yaw_f[0]), math.cos(yaw_f[0])]
-    direction = np.array([-left, -fwd]) / math.hypot(fwd, left)   # image x right, y down
-    return math.degrees(yaw_f[1] - yaw_f[0]), direction
+    ts, rots, centres = _sparus_poses(folder, reading)
+    n = len(rows)
+    tf = offset + np.arange(n) / 4.9988
+    rf = [_rotation_at(ts, rots, t) for t in tf]
+    cf = np.stack([np.interp(tf, ts, centres[:, k]) for k in range(3)], 1)
+
+    def image(v):   # camera-frame vector -> image (x right, y down)
+        return np.array([v[0], v[1]]) if axes == "optical" else np.array([-v[1], -v[0]])
+
+    def angle(v):
+        return math.degrees(math.atan2(v[1], v[0]))
+
+    def wrap(a):
+        return (a + 180.0) % 360.0 - 180.0
+
+    # camera n-1's x axis seen in camera 0's image; on screen (y down) a turn
+    # counter-clockwise is a negative atan2
+    x_last = image(rf[0] @ rf[-1].T @ np.array([1.0, 0.0, 0.0]))
+    turn_poses = -wrap(angle(x_last) - angle(image(np.array([1.0, 0.0, 0.0]))))
+    mats = [np.asarray(r["matrix"]).reshape(2, 3) for r in rows]
+    h, w = cv2.imread(rows[0]["file"], cv2.IMREAD_GRAYSCALE).shape
+    c = np.array([(w - 1) / 2.0, (h - 1) / 2.0])
+    inside = (tf >= ts[0]) & (tf <= ts[-1])
+    diffs = []
+    for k in range(n - window):
+        if not (inside[k] and inside[k + window]):
+            continue
+        seen = apply_matrix(compose(mats[k], invert_matrix(mats[k + window])), [c])[0] - c
+        moved = image(rf[k] @ (cf[k + window] - cf[k]))
+        diffs.append(wrap(angle(seen) - angle(moved)))
+    d = np.radians(diffs)
+    fixed = math.degrees(math.atan2(np.sin(d).mean(), np.cos(d).mean()))
+    return {"turn_poses": turn_poses, "turn": rows[-1]["heading"] - rows[0]["heading"],
+            "diffs": diffs, "offset": fixed,
+            "spread": max(abs(wrap(x - fixed)) for x in diffs)}
+
+
+def _sparus_agrees(cmp) -> bool:
+    """The heading change within 5 degrees, and the direction of travel off by
+    one fixed angle (20-40 degrees: this data's yaw offset between the pose
+    'camera' frame and the image axes) give or take 6 degrees in every 3 s
+    window."""
+    return (abs(cmp["turn"] - cmp["turn_poses"]) < 5.0 and cmp["spread"] < 6.0
+            and 20.0 < cmp["offset"] < 40.0)
 
 
 def test_sparus_agrees_with_its_camera_poses(real_runs):
     folder = data_path("sequences", "sparus_auv_seabed")
     res = real_runs("sparus_auv_seabed")
-    turn, direction = _sparus_truth(folder, len(res.rows))
-    measured_turn = res.rows[-1]["heading"] - res.rows[0]["heading"]
-    # the vehicle turned left by ~23 degrees; we see 20-30 (the poses are a
-    # navigation estimate, updated every 0.35 s)
-    assert turn == pytest.approx(23.1, abs=1.0)
-    assert measured_turn == pytest.approx(turn, rel=0.25)
-    d = np.array([res.rows[-1]["x"] - res.rows[0]["x"], res.rows[-1]["y"] - res.rows[0]["y"]])
-    cosang = float(d @ direction / np.linalg.norm(d))
-    assert math.degrees(math.acos(min(1.0, cosang))) < 20.0
+    cmp = _sparus_comparison(res.rows, folder)
+    # the poses: a steady turn of ~23 degrees counter-clockwise in the image
+    # (-23 about the downward optical axis); the camera centre a smooth track
+    assert cmp["turn_poses"] == pytest.approx(22.9, abs=1.0)
+    ts, _, centres = _sparus_poses(folder)
+    speeds = np.hypot(*np.diff(centres[:, :2], axis=0).T) / np.diff(ts)
+    assert centres[0, 2] == pytest.approx(13.94, abs=0.05) and speeds.max() < 0.25
+    # the odometry: the same turn (measured ~25.5), and its direction of travel
+    # off by one fixed angle (~+30) within ~2.5 degrees over the six 3 s windows
+    assert len(cmp["diffs"]) == 6
+    assert _sparus_agrees(cmp), cmp
+    # the test is not blind: the other readings of the same numbers fail it
+    # (camera-in-world with optical axes: the turn is -23; with the vehicle's
+    # axes, as this test once assumed: the turn agrees but the direction wanders
+    # by ~30 degrees, since t = -R C swings with every tilt of the camera)
+    for reading, axes in (("camera-in-world", "optical"), ("camera-in-world", "body"),
+                          ("world->camera", "body")):
+        wrong = _sparus_comparison(res.rows, folder, reading, axes)
+        assert not _sparus_agrees(wrong), (reading, axes, wrong)

@@ -35,7 +35,6 @@ import calendar
 import cmath
 import csv
 import dataclasses
-import io
 import json
 import math
 import os
@@ -102,7 +101,6 @@ _IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
 
 # ============================================================================ result
-@dataclass
 class OdometryResult:
     """What :func:`run_odometry` produced.
 
@@ -118,19 +116,34 @@ class OdometryResult:
         it was measured against), ``method`` (``"prior"``, ``"full"``,
         ``"previous"``), ``status`` (``"origin"``, ``"measured"``,
         ``"assumed"``, ``"unreadable"``), ``ms``, ``matrix`` and
-        ``pair_matrix`` (2x3 as 6 floats, row-major).
+        ``pair_matrix`` (2x3 as 6 floats, row-major). The run does not keep
+        the rows in memory (a survey of 100,000 photos would hold about
+        250 MB of them): they are read from ``csv_path`` by
+        :func:`read_odometry_csv` when first asked for, then kept.
     summary : dict
         The content of ``summary.json``.
     csv_path, json_path : Path
     mosaic_path, trajectory_path : Path or None
     """
 
-    rows: list
-    summary: dict
-    csv_path: Path
-    json_path: Path
-    mosaic_path: Path | None = None
-    trajectory_path: Path | None = None
+    def __init__(self, rows, summary, csv_path, json_path, mosaic_path=None,
+                 trajectory_path=None):
+        self._rows = None if rows is None else list(rows)
+        self.summary = summary
+        self.csv_path = Path(csv_path)
+        self.json_path = Path(json_path)
+        self.mosaic_path = mosaic_path
+        self.trajectory_path = trajectory_path
+
+    @property
+    def rows(self) -> list:
+        if self._rows is None:
+            self._rows = read_odometry_csv(self.csv_path)
+        return self._rows
+
+    def __repr__(self):
+        return (f"OdometryResult(frames={self.summary.get('frames')}, csv_path={self.csv_path!r}, "
+                f"mosaic_path={self.mosaic_path!r}, trajectory_path={self.trajectory_path!r})")
 
 
 # ===================================================================== frame lists
@@ -225,8 +238,9 @@ def list_frames(frames) -> list:
         every name carries one, else in natural name order: ``f2`` before
         ``f10``), a video file (one entry ``"video.mp4#<i>"`` per frame),
         or a list of image paths kept in the given order. A list of one
-        folder or one video is read as that folder or video. Arrays in a
-        list are taken as frames as they are.
+        folder is read as that folder; each video in a list is replaced
+        by its frames, in place (several videos: one after the other, in
+        the order given). Arrays in a list are taken as frames as they are.
 
     Raises
     ------
@@ -272,7 +286,10 @@ def list_frames(frames) -> list:
                                      "folder alone")
             if not Path(s).exists() and _split_video_ref(s) is None:
                 raise ParameterError(f"{s}: no such file")
-            out.append(s)
+            if _is_video(Path(s)) and Path(s).is_file():
+                out.extend(_video_frames(Path(s)))   # each video of a list: its frames
+            else:
+                out.append(s)
         else:
             raise ParameterError(f"frames: unexpected item {type(it).__name__}; expected paths")
     if not out:
@@ -630,6 +647,7 @@ def _fmt(v, digits=None) -> str:
     if isinstance(v, float):
         if not math.isfinite(v):
             return ""
+        v = float(v)        # a numpy float's repr is "np.float64(...)"
         return repr(v) if digits is None else f"{v:.{digits}f}"
     return str(v)
 
@@ -659,14 +677,19 @@ def read_odometry_csv(path) -> list:
 
     A last line cut short (the run was killed while writing it) is dropped.
     """
-    rows = []
+    return list(_iter_odometry_csv(path))
+
+
+def _iter_odometry_csv(path):
+    """The rows of :func:`read_odometry_csv` one at a time (the file is not read whole)."""
     with open(path, newline="") as f:
-        text = f.read()
-    if text and not text.endswith("\n"):
-        text = text[: text.rfind("\n") + 1]     # the last row was cut short
-    if text:
-        reader = csv.DictReader(io.StringIO(text, newline=""))
-        for rec in reader:
+        def complete_lines():
+            for line in f:
+                if not line.endswith("\n"):
+                    return          # the last row was cut short
+                yield line
+
+        for rec in csv.DictReader(complete_lines()):
             try:
                 row = {"index": int(rec["index"]), "file": rec["file"]}
                 for k in _FLOAT_COLS:
@@ -684,10 +707,17 @@ def read_odometry_csv(path) -> list:
                 row["pair_matrix"] = None if pm is None else pm.ravel().tolist()
                 if row["status"] != "unreadable" and m is None:
                     raise ValueError("no matrix")
-            except (KeyError, ValueError, TypeError):
-                break  # a truncated or foreign line: stop here
-            rows.append(row)
-    return rows
+            except (KeyError, ValueError, TypeError, AttributeError):
+                return  # a truncated or foreign line: stop here
+            yield row
+
+
+def _closing_enumerate(gen):
+    """enumerate(gen), closing the generator (its file) however the loop ends."""
+    try:
+        yield from enumerate(gen)
+    finally:
+        gen.close()
 
 
 def _pose_fields(cum, shape, heading_prev):
@@ -720,22 +750,34 @@ def _as_bgr8(img: np.ndarray) -> np.ndarray:
     return a
 
 
-def _build_mosaic(rows, reader: _Reader, shape, path: Path, max_side: int = 4000):
+def _posed(csv_path):
+    """(index, inverse cumulative matrix) of the frames with a measured pose, from the CSV.
+
+    Frames whose pose is only assumed (a gap) are left out: their place is a guess."""
+    for r in _iter_odometry_csv(csv_path):
+        if r.get("matrix") is not None and r["status"] in ("origin", "measured"):
+            yield r["index"], invert_matrix(np.asarray(r["matrix"]).reshape(2, 3))
+
+
+def _build_mosaic(csv_path, reader: _Reader, shape, path: Path, max_side: int = 4000):
     """Frames placed by the trajectory on one canvas (frame-0 pixels).
 
     Each canvas pixel comes from the frame that saw it nearest to that
-    frame's centre (sharp, no double images, little vignetting seam)."""
-    # frames whose pose is only assumed (a gap) are left out: their place is a guess
-    posed = [r for r in rows
-             if r.get("matrix") is not None and r["status"] in ("origin", "measured")]
-    if not posed:
-        return None
+    frame's centre (sharp, no double images, little vignetting seam).
+    Memory does not grow with the number of frames: the canvas is at most
+    ``max_side`` pixels on its longer side (frames are shrunk to fit), the
+    poses are read from the CSV twice (extent, then placing) and the frames
+    one at a time."""
     h, w = shape
     corners = np.array([[-0.5, -0.5], [w - 0.5, -0.5], [w - 0.5, h - 0.5], [-0.5, h - 0.5]])
-    invs = [invert_matrix(np.asarray(r["matrix"]).reshape(2, 3)) for r in posed]
-    pts = np.vstack([apply_matrix(m, corners) for m in invs])
-    x0, y0 = pts.min(axis=0)
-    x1, y1 = pts.max(axis=0)
+    x0 = y0 = math.inf
+    x1 = y1 = -math.inf
+    for _, inv in _posed(csv_path):
+        q = apply_matrix(inv, corners)
+        x0, y0 = min(x0, q[:, 0].min()), min(y0, q[:, 1].min())
+        x1, y1 = max(x1, q[:, 0].max()), max(y1, q[:, 1].max())
+    if not math.isfinite(x0):
+        return None
     span = max(x1 - x0, y1 - y0, 1.0)
     f = min(1.0, max_side / span)
     cw = int(math.ceil((x1 - x0) * f)) + 1
@@ -746,9 +788,9 @@ def _build_mosaic(rows, reader: _Reader, shape, path: Path, max_side: int = 4000
     yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
     c = _centre(shape)
     dist = (((xx - c[0]) / w) ** 2 + ((yy - c[1]) / h) ** 2).astype(np.float32) + 1.0  # >= 1
-    for r, inv in zip(posed, invs):
+    for index, inv in _posed(csv_path):
         try:
-            img = _as_bgr8(reader.raw(r["index"]))
+            img = _as_bgr8(reader.raw(index))
         except (ImageError, OSError):
             continue
         if img.shape[:2] != (h, w):
@@ -781,13 +823,14 @@ def _build_mosaic(rows, reader: _Reader, shape, path: Path, max_side: int = 4000
     return path
 
 
-def _plot_trajectory(rows, path: Path, metric: bool):
-    """The trajectory picture: seahough.plot when available, else a minimal one."""
-    plot_rows = rows
-    unit = "px"
-    if metric:
-        plot_rows = [dict(r, x=r.get("x_m"), y=r.get("y_m")) for r in rows]
-        unit = "m"
+def _plot_trajectory(csv_path, path: Path, metric: bool):
+    """The trajectory picture: seahough.plot when available, else a minimal one.
+
+    Only the columns drawn are read back from the CSV (x, y, heading, flags)."""
+    kx, ky = ("x_m", "y_m") if metric else ("x", "y")
+    plot_rows = [{"x": r.get(kx), "y": r.get(ky), "heading": r.get("heading"),
+                  "flags": r.get("flags")} for r in _iter_odometry_csv(csv_path)]
+    unit = "m" if metric else "px"
     try:
         from .plot import plot_trajectory
     except ImportError:
@@ -818,6 +861,11 @@ def _metres_per_pixel(metres_per_pixel, altitude, focal_px):
         return number(name, v, lo=0.0, lo_open=True)
 
     if metres_per_pixel is not None:
+        if altitude is not None or focal_px is not None:
+            given = ", ".join(n for n, v in (("altitude", altitude), ("focal_px", focal_px))
+                              if v is not None)
+            raise ParameterError(f"give metres_per_pixel, or altitude with focal_px, not both "
+                                 f"(got metres_per_pixel={metres_per_pixel!r} and {given})")
         return pos("metres_per_pixel", metres_per_pixel)
     if altitude is None and focal_px is None:
         return None
@@ -834,7 +882,7 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
 
     Parameters
     ----------
-    frames : folder, video file or list of image paths
+    frames : folder, video file or list of image paths (or of videos)
         See :func:`list_frames` (frames of any size, depth and colour; all
         must have the first readable frame's size).
     out_dir : path
@@ -843,7 +891,9 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     metres_per_pixel : float, optional
         Ground size of a frame-0 pixel; or give ``altitude`` (m) and
         ``focal_px`` (focal length in pixels) of a down-looking camera:
-        metres per pixel = altitude / focal_px. Adds ``x_m, y_m``.
+        metres per pixel = altitude / focal_px. Adds ``x_m, y_m``. Giving
+        ``metres_per_pixel`` with ``altitude`` or ``focal_px`` is refused
+        (ParameterError).
     scale_range, angle_range : (float, float)
         Size change and turn (degrees, counter-clockwise as displayed)
         possible between consecutive frames; a range of one value is a known
@@ -856,13 +906,17 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     progress : bool
         A tqdm progress bar on stderr.
     mosaic : bool
-        Build ``mosaic.png`` (needs the frames read a second time).
+        Build ``mosaic.png`` (needs the frames read a second time; at most
+        4000 px on its longer side, the frames shrunk to fit).
     config : seahough.Config, optional
         Search tuning (default :data:`ODOMETRY_CONFIG`).
 
     Returns
     -------
     OdometryResult
+        Memory does not grow with the number of frames: each row goes to
+        the CSV when finished, the summary is counted as they go, and the
+        result's ``rows`` are read back from the CSV when first asked for.
 
     Notes
     -----
@@ -915,36 +969,13 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     json_path = out / "summary.json"
     columns = _CSV_BASE + (_CSV_METRIC if mpp else []) + _CSV_MORE
 
-    rows: list = []
-    if resume and csv_path.exists():
-        rows = read_odometry_csv(csv_path)
-        if len(rows) > len(items):
-            raise ParameterError(f"{csv_path} holds {len(rows)} frames, more than the "
-                                 f"{len(items)} given: not the same sequence")
-        for pos, r in enumerate(rows):
-            if r["index"] != pos or r["file"] != reader.name(pos):
-                raise ParameterError(f"{csv_path}: row {pos} is frame {r['index']} "
-                                     f"{r['file']!r}, but frame {pos} here is "
-                                     f"{reader.name(pos)!r}: not the same sequence "
-                                     "(run without resume)")
-    n_resumed = len(rows)
-
-    # ---- rebuild the state from the rows
+    # Rows are not kept in memory (a long survey would grow without bound): each one
+    # is written to the CSV as it is finished, the summary is counted as they go
+    # by, and the mosaic and the plot read the CSV back.
     st = _State()
+    totals = _Totals()
     frames_mem: dict = {}
-    for r in rows:
-        r["_cum"] = None if r["matrix"] is None else np.asarray(r["matrix"], float).reshape(2, 3)
-        if r["status"] != "unreadable" and st.shape is None:
-            g0 = to_gray(reader.raw(r["index"]), max_pixels=cfg.max_pixels)
-            st.shape, st.box = g0.shape, content_box(g0)
-        if mpp:
-            r["x_m"], r["y_m"] = _metric(r, st.shape, mpp)
-        else:
-            r.pop("x_m", None)
-            r.pop("y_m", None)
-        _advance(st, r)
-        if r["status"] != "unreadable":
-            st.heading = r["heading"]
+    searcher = None
 
     def load(i):
         if i is None:
@@ -954,22 +985,59 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
             frames_mem[i] = _Frame(i, searcher.crop(gray_i))
         return frames_mem[i]
 
-    searcher = None
+    # ---- resume: rebuild the state from the rows kept, rewriting them (drops a
+    # cut-off line) into a new file, read and written one row at a time
+    n_resumed = 0
+    if resume and csv_path.exists():
+        part = csv_path.with_name(csv_path.name + ".part")
+        try:
+            with open(part, "w", newline="") as fnew:
+                writer = csv.DictWriter(fnew, fieldnames=columns, extrasaction="ignore")
+                writer.writeheader()
+                old = _iter_odometry_csv(csv_path)
+                for pos, r in _closing_enumerate(old):
+                    if pos >= len(items):
+                        n_old = pos + 1 + sum(1 for _ in old)
+                        raise ParameterError(f"{csv_path} holds {n_old} frames, more than the "
+                                             f"{len(items)} given: not the same sequence")
+                    if r["index"] != pos or r["file"] != reader.name(pos):
+                        raise ParameterError(f"{csv_path}: row {pos} is frame {r['index']} "
+                                             f"{r['file']!r}, but frame {pos} here is "
+                                             f"{reader.name(pos)!r}: not the same sequence "
+                                             "(run without resume)")
+                    r["_cum"] = (None if r["matrix"] is None
+                                 else np.asarray(r["matrix"], float).reshape(2, 3))
+                    if r["status"] != "unreadable" and st.shape is None:
+                        g0 = to_gray(reader.raw(r["index"]), max_pixels=cfg.max_pixels)
+                        st.shape, st.box = g0.shape, content_box(g0)
+                    if mpp:
+                        r["x_m"], r["y_m"] = _metric(r, st.shape, mpp)
+                    else:
+                        r.pop("x_m", None)
+                        r.pop("y_m", None)
+                    _advance(st, r)
+                    if r["status"] != "unreadable":
+                        st.heading = r["heading"]
+                    writer.writerow(_row_to_csv(r, columns))
+                    totals.add(r)
+                    n_resumed += 1
+        except BaseException:
+            part.unlink(missing_ok=True)
+            raise
+        os.replace(part, csv_path)
+        fcsv = open(csv_path, "a", newline="")
+    else:
+        fcsv = open(csv_path, "w", newline="")
+        csv.DictWriter(fcsv, fieldnames=columns).writeheader()
+    writer = csv.DictWriter(fcsv, fieldnames=columns, extrasaction="ignore")
+    fcsv.flush()
+
     if st.shape is not None:
         searcher = _Searcher(st.box, scale_range, angle_range, cfg)
         load(st.key)
         load(st.prev)
 
-    # ---- CSV: rewrite what is kept (drops a cut-off line), then append
-    fcsv = open(csv_path, "w", newline="")
-    writer = csv.DictWriter(fcsv, fieldnames=columns, extrasaction="ignore")
-    writer.writeheader()
-    for r in rows:
-        writer.writerow(_row_to_csv(r, columns))
-    fcsv.flush()
-
     bar = None
-    n_flagged = sum(1 for r in rows if r["flags"])
     if progress:
         from tqdm import tqdm
         bar = tqdm(total=len(items), initial=n_resumed, file=sys.stderr, unit="frame",
@@ -1015,28 +1083,25 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
             for k in list(frames_mem):
                 if k not in (st.key, st.prev):
                     del frames_mem[k]
-            rows.append(row)
             writer.writerow(_row_to_csv(row, columns))
             fcsv.flush()
+            totals.add(row)
             if bar is not None:
-                n_flagged += bool(row["flags"])
                 bar.update(1)
-                bar.set_postfix_str(f"flagged {n_flagged}", refresh=False)
+                bar.set_postfix_str(f"flagged {totals.flagged}", refresh=False)
     finally:
         fcsv.close()
         if bar is not None:
             bar.close()
+    frames_mem.clear()
 
-    for r in rows:
-        r.pop("_cum", None)
-
-    # ---- outputs
+    # ---- outputs (from the CSV, one row at a time)
     mosaic_path = None
     if mosaic and st.shape is not None:
-        mosaic_path = _build_mosaic(rows, reader, st.shape, out / "mosaic.png")
+        mosaic_path = _build_mosaic(csv_path, reader, st.shape, out / "mosaic.png")
     reader.close()
-    trajectory_path = _plot_trajectory(rows, out / "trajectory.png", bool(mpp))
-    summary = _summary(rows, items, mpp, scale_range, angle_range, cfg, n_resumed,
+    trajectory_path = _plot_trajectory(csv_path, out / "trajectory.png", bool(mpp))
+    summary = _summary(totals, items, mpp, scale_range, angle_range, cfg, n_resumed,
                        time.perf_counter() - t_start, metres_per_pixel, altitude, focal_px)
     summary["outputs"] = {"csv": str(csv_path), "json": str(json_path),
                           "mosaic": None if mosaic_path is None else str(mosaic_path),
@@ -1044,7 +1109,7 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     with open(json_path, "w") as f:
         json.dump(summary, f, indent=2)
         f.write("\n")
-    return OdometryResult(rows, summary, csv_path, json_path, mosaic_path, trajectory_path)
+    return OdometryResult(None, summary, csv_path, json_path, mosaic_path, trajectory_path)
 
 
 def _measure_frame(row, i, gray, st: _State, searcher: _Searcher, load):
@@ -1091,7 +1156,7 @@ def _metric(row, shape, mpp):
     if row.get("x") is None or shape is None:
         return None, None
     c = _centre(shape)
-    return (row["x"] - c[0]) * mpp, (row["y"] - c[1]) * mpp
+    return float((row["x"] - c[0]) * mpp), float((row["y"] - c[1]) * mpp)
 
 
 def _finish_row(row, st: _State, mpp):
@@ -1115,42 +1180,63 @@ def _finish_row(row, st: _State, mpp):
                    pair_matrix=pm.ravel().tolist())
 
 
-def _summary(rows, items, mpp, scale_range, angle_range, cfg, n_resumed, wall_s,
-             metres_per_pixel, altitude, focal_px) -> dict:
-    posed = [r for r in rows if r.get("x") is not None]
-    length = 0.0
-    for a, b in zip(posed, posed[1:]):
-        length += math.hypot(b["x"] - a["x"], b["y"] - a["y"])
-    end = posed[-1] if posed else None
-    ms = [r["ms"] for r in rows if r.get("ms") is not None]
-    measured = sum(1 for r in rows if r["status"] == "measured")
-    flagged = sum(1 for r in rows if r.get("flags"))
-    methods = {}
-    for r in rows:
+class _Totals:
+    """The summary's counts, updated row by row (the rows themselves are not kept)."""
+
+    def __init__(self):
+        self.frames = self.measured = self.flagged = self.unreadable = self.assumed = 0
+        self.methods: dict = {}
+        self.refs: set = set()
+        self.length = 0.0
+        self.last_xy = None
+        self.end = None
+        self.ms_sum, self.ms_n = 0.0, 0
+
+    def add(self, r):
+        self.frames += 1
+        self.measured += r["status"] == "measured"
+        self.flagged += bool(r.get("flags"))
+        self.unreadable += r["status"] == "unreadable"
+        self.assumed += r["status"] == "assumed"
         if r.get("method"):
-            methods[r["method"]] = methods.get(r["method"], 0) + 1
-    keyframes = sorted({r["ref"] for r in rows if r.get("ref") is not None})
+            self.methods[r["method"]] = self.methods.get(r["method"], 0) + 1
+        if r.get("ref") is not None:
+            self.refs.add(r["ref"])
+        if r.get("x") is not None:
+            if self.last_xy is not None:
+                self.length += math.hypot(r["x"] - self.last_xy[0], r["y"] - self.last_xy[1])
+            self.last_xy = (r["x"], r["y"])
+            self.end = {"index": r["index"], "x": r["x"], "y": r["y"],
+                        "heading": r["heading"], "scale": r["scale"], "x_m": r.get("x_m"),
+                        "y_m": r.get("y_m")}
+        if r.get("ms") is not None:
+            self.ms_sum += r["ms"]
+            self.ms_n += 1
+
+
+def _summary(t: _Totals, items, mpp, scale_range, angle_range, cfg, n_resumed, wall_s,
+             metres_per_pixel, altitude, focal_px) -> dict:
+    length = t.length
+    mean_ms = t.ms_sum / t.ms_n if t.ms_n else None
     src = items[0] if len(items) and not isinstance(items[0], np.ndarray) else "arrays"
     s = {
-        "frames": len(rows),
-        "measured_pairs": measured,
-        "flagged_pairs": flagged,
-        "unreadable_frames": sum(1 for r in rows if r["status"] == "unreadable"),
-        "assumed_poses": sum(1 for r in rows if r["status"] == "assumed"),
-        "methods": methods,
-        "keyframes": len(keyframes),
+        "frames": t.frames,
+        "measured_pairs": t.measured,
+        "flagged_pairs": t.flagged,
+        "unreadable_frames": t.unreadable,
+        "assumed_poses": t.assumed,
+        "methods": dict(t.methods),
+        "keyframes": len(t.refs),
         "path_length_px": length,
         "path_length_m": length * mpp if mpp else None,
-        "end_point": None if end is None else {
-            "index": end["index"], "x": end["x"], "y": end["y"], "heading": end["heading"],
-            "scale": end["scale"], "x_m": end.get("x_m"), "y_m": end.get("y_m")},
-        "mean_ms_per_frame": float(np.mean(ms)) if ms else None,
+        "end_point": t.end,
+        "mean_ms_per_frame": mean_ms,
         "resumed_rows": n_resumed,
         "wall_s": wall_s,
         # the keys the CLI looks for
         "distance": length * mpp if mpp else length,
         "unit": "m" if mpp else "px",
-        "ms_per_frame": float(np.mean(ms)) if ms else None,
+        "ms_per_frame": mean_ms,
         "settings": {
             "source": str(src) if not isinstance(src, str) else src,
             "metres_per_pixel": mpp, "given_metres_per_pixel": metres_per_pixel,
