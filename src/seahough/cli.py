@@ -415,16 +415,24 @@ def _path_length(rows) -> float:
     return float(np.hypot(*np.diff(pts, axis=0).T).sum()) if len(pts) > 1 else 0.0
 
 
+def _odometry_rows(result):
+    """The run's rows one at a time (a long survey's rows are not all loaded)."""
+    it = getattr(result, "iter_rows", None)
+    return it() if callable(it) else iter(result.rows)
+
+
 def _odometry_summary(result, wall_s: float, unit: str) -> dict:
-    rows = list(result.rows)
     s = dict(getattr(result, "summary", {}) or {})
-    n = len(rows)
+    # the summary has the counts; the rows are read only where it lacks them
+    n = s.get("frames")
+    if not isinstance(n, int):
+        n = sum(1 for _ in _odometry_rows(result))
     flagged = s.get("flagged_pairs")
     if not isinstance(flagged, int):
-        flagged = sum(1 for r in rows[1:] if r.get("flags"))
+        flagged = sum(1 for r in _odometry_rows(result) if r.get("flags") and r.get("index", 0) > 0)
     dist = s.get("distance")
     if not isinstance(dist, (int, float)) or not math.isfinite(dist):
-        dist = _path_length(rows)
+        dist = _path_length(list(_odometry_rows(result)))
     unit = s.get("unit", unit)
     per = None
     for key in ("time_per_frame_ms", "ms_per_frame"):
@@ -485,8 +493,10 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
     """Dead reckoning: the camera's path from overlapping frames.
 
     \b
-    FRAMES is a folder of images (sorted by name), a video file, or image
-    files in order. An earlier frame (a keyframe) is the pattern searched
+    FRAMES is a folder of images (in the order of the timestamps in their
+    names when every name has one, e.g. cam_20240210_134109.500.png, else in
+    natural name order: f2 before f10), one or more video files (read frame
+    by frame, one after the other), or image files in the order given. An earlier frame (a keyframe) is the pattern searched
     for in each frame; the accumulator peak is the motion. Positions are in pixels of the first
     frame, or metres with --metres-per-pixel, or --altitude and --focal-px.
     Writes odometry.csv, summary.json, trajectory.png and mosaic.png to --out.
@@ -522,11 +532,15 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
     click.echo(f"frames: {summ['frames']}   flagged pairs: {summ['flagged_pairs']}   "
                f"distance: {summ['distance']:.2f} {summ['unit']}   "
                f"time per frame: {summ['time_per_frame_ms']:.0f} ms")
-    flagged = [r for r in result.rows if r.get("flags")]
-    for r in flagged[:10]:
-        click.echo(f"  flagged: frame {r.get('index')} {r.get('file')}: {r.get('flags')}")
-    if len(flagged) > 10:
-        click.echo(f"  ... and {len(flagged) - 10} more (see the CSV's flags column)")
+    n_flagged = 0
+    for r in _odometry_rows(result):
+        if not r.get("flags"):
+            continue
+        n_flagged += 1
+        if n_flagged <= 10:
+            click.echo(f"  flagged: frame {r.get('index')} {r.get('file')}: {r.get('flags')}")
+    if n_flagged > 10:
+        click.echo(f"  ... and {n_flagged - 10} more (see the CSV's flags column)")
     files = [summ[k] for k in ("csv", "json", "trajectory", "mosaic") if summ[k]]
     if files:
         click.echo("wrote: " + ", ".join(files))

@@ -141,6 +141,11 @@ class OdometryResult:
             self._rows = read_odometry_csv(self.csv_path)
         return self._rows
 
+    def iter_rows(self):
+        """The rows one at a time, from the CSV unless already loaded (for
+        runs too long to hold every row)."""
+        return iter(self._rows) if self._rows is not None else _iter_odometry_csv(self.csv_path)
+
     def __repr__(self):
         return (f"OdometryResult(frames={self.summary.get('frames')}, csv_path={self.csv_path!r}, "
                 f"mosaic_path={self.mosaic_path!r}, trajectory_path={self.trajectory_path!r})")
@@ -904,7 +909,7 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
         rebuilt from them, and the result is the same as an uninterrupted
         run. Without it, an existing CSV is overwritten.
     progress : bool
-        A tqdm progress bar on stderr.
+        A tqdm progress bar on stderr (shown only when stderr is a terminal).
     mosaic : bool
         Build ``mosaic.png`` (needs the frames read a second time; at most
         4000 px on its longer side, the frames shrunk to fit).
@@ -1040,8 +1045,9 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     bar = None
     if progress:
         from tqdm import tqdm
+        # like the CLI's bars: only on a terminal (disable=None), wiped when done
         bar = tqdm(total=len(items), initial=n_resumed, file=sys.stderr, unit="frame",
-                   desc="odometry", dynamic_ncols=True)
+                   desc="odometry", dynamic_ncols=True, disable=None, leave=False)
     try:
         for i in range(n_resumed, len(items)):
             t0 = time.perf_counter()
