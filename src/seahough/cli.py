@@ -332,6 +332,7 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
         cfg_kw["downscale"] = downscale
     if keypoints is not None:
         cfg_kw["n_keypoints"] = keypoints
+        cfg_kw["n_keypoints_2d"] = keypoints
     if equalize:
         cfg_kw["equalize"] = True
     cfg = Config(**cfg_kw)

@@ -251,7 +251,10 @@ class Detector:
         factor = features.gradients.factor if features is not None else choose_factor(
             gray.shape, cfg, p.extent, s0)
         if features is None:
-            features = extract_features(gray, factor, cfg)
+            known = (self.scale_range[0] == self.scale_range[1]
+                     and self.angle_range[0] == self.angle_range[1])
+            n_kp = cfg.n_keypoints_2d if known and cfg.n_keypoints_2d is not None else None
+            features = extract_features(gray, factor, cfg, n_keypoints=n_kp)
         t1 = time.perf_counter()
         timings["features"] = t1 - t0
         if len(features.segments) < 4:
