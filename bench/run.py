@@ -1042,7 +1042,8 @@ def findings(results) -> str:
         g = r["moderate"]["GHT (Guil)"]
         out.append(
             f"- **Markers.** seahough failures (no answer / wrong): moderate {s.failures}, hard "
-            f"{h.failures}. The wrong answers seen were the unequal-armed cross with an arm under "
+            f"{h.failures}. The wrong answers seen in earlier runs (none when both counts are "
+            "0 / 0) were the unequal-armed cross with an arm under "
             "silt, which then looks like its own 180-degree turn, and small markers (scale ~0.6) "
             "among the amphorae of the wreck photo. GHT (Guil) is limited by its bins (1 deg, "
             "scale step 0.025, 2 px): its poses are typically 3-5 px off at the corners, so most "
@@ -1056,12 +1057,14 @@ def findings(results) -> str:
         miss = "MISSED" if s.success < 0.90 else "met"
         out.append(
             f"- **Fragments ({miss}: {pct(s.success)} against 90 %).** seahough failures (no answer "
-            f"/ wrong): {s.failures}. The 'no answer' cases are mostly correct poses scored just "
-            "under the Detector's default min_score=0.5 (0.43-0.48 when inspected): the patch is "
-            "cut from the clear photo while the scene went through the water model, so blur, "
-            "haze and noise erase part of the patch's weak texture edges. With min_score "
+            f"/ wrong): {s.failures}. The patch is cut from the clear photo while the scene "
+            "went through the water model, whose blur, haze and noise erase part of the "
+            "patch's finest texture edges; without Config.pattern_blur (the pattern blurred "
+            "by 1 px before its edges are found) correct poses scored 0.43-0.48, just under the "
+            "default min_score=0.5, and this task stood at 80 %. With min_score "
             f"{FRAG_LOW_SCORE} the same detector reaches {pct(low.success)} (second row). The "
-            "remaining misses are low-texture sand patches (the murky starfish photo). SIFT "
+            "remaining misses are low-texture sand patches (the murky starfish photo), where "
+            "the best candidate scores about 0.2: not found, rather than a wrong pose. SIFT "
             "with contrastThreshold 0.01 is the strongest peer on the texture tasks (fragments "
             "and pairs): as good or better in success and median error, at 4-5 times "
             "seahough's time; SIFT at its default threshold loses the murky cases for lack of "
@@ -1109,7 +1112,8 @@ def findings(results) -> str:
         if sv:
             txt += (f"On the tiled pool (forward-oblique camera: the motion is a perspective "
                     f"expansion, not a similarity) seahough declines {sv['none']} of {sv['pairs']} "
-                    "pairs (confidence < 0.15: the tile grid gives near-equal peaks); phase "
+                    "pairs (confidence < 0.15: the tile grid gives near-equal peaks; "
+                    "tests/test_motion.py checks that what it does answer closes its loops); phase "
                     "correlation's small loop inconsistency there is self-consistency of a "
                     "translation-only model, not accuracy. ")
         if sp and sps:
@@ -1117,7 +1121,10 @@ def findings(results) -> str:
             txt += (f"On the small 384x288 Sparus frames seahough ({ms_fmt(sp['ms'])} ms) is "
                     f"{fast} than SIFT+RANSAC ({ms_fmt(sps['ms'])} ms): SIFT finds few key points "
                     "there, while seahough's time has a floor (a 320 px working image, 256 "
-                    "pattern points, candidate refinement and a full-resolution refinement).")
+                    "pattern points, the previous frame's features at two scales, candidate "
+                    "refinement and a full-resolution refinement). In a dead-reckoning run "
+                    "(run_odometry) the previous frame's features are reused and the last "
+                    "motion narrows the search: 8-10 ms a pair on these frames (docs/odometry.md).")
         out.append(txt)
     return "\n".join(out)
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -40,3 +42,17 @@ def corner_error(matrix_found, matrix_true, shape, symmetric: bool = False) -> f
         d = np.hypot(f[:, None, 0] - t[None, :, 0], f[:, None, 1] - t[None, :, 1])
         return float(d.min(axis=0).max())
     return float(np.max(np.hypot(*(f - t).T)))
+
+
+def seahough_command() -> Path:
+    """The installed ``seahough`` console script beside ``sys.executable``.
+
+    The tests run what users run (the entry point of the installed package),
+    never ``python -m seahough`` from the source tree: a missing command is a
+    failure, not a reason to fall back."""
+    exe = Path(sys.executable).parent / ("seahough.exe" if os.name == "nt" else "seahough")
+    if not exe.is_file():
+        pytest.fail(f"the seahough command is not installed beside {sys.executable} (no {exe}): "
+                    "install the package into this environment (pip install -e .)",
+                    pytrace=False)
+    return exe

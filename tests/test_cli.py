@@ -22,22 +22,10 @@ import seahough
 from seahough import simulate as sim
 from seahough._data import shared_data_dir
 
+from conftest import seahough_command
+
 HAS_ODOMETRY = importlib.util.find_spec("seahough.odometry") is not None
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
-
-
-def seahough_command() -> Path:
-    """The installed ``seahough`` console script beside ``sys.executable``.
-
-    The tests run what users run (the entry point of the installed package),
-    never ``python -m seahough`` from the source tree: a missing command is a
-    failure, not a reason to fall back."""
-    exe = Path(sys.executable).parent / ("seahough.exe" if os.name == "nt" else "seahough")
-    if not exe.is_file():
-        pytest.fail(f"the seahough command is not installed beside {sys.executable} (no {exe}): "
-                    "install the package into this environment (pip install -e .)",
-                    pytrace=False)
-    return exe
 
 
 def _env() -> dict:

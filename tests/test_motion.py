@@ -77,3 +77,20 @@ def test_real_low_contrast_pair_without_distinct_objects():
     assert m is not None and m.confidence > 0.2
     assert abs(m.dx) < 15 and 115 < m.dy < 140
     assert abs(m.angle) < 2 and abs(m.scale - 1) < 0.03
+
+
+def test_repetitive_tiles_are_declined_rather_than_answered_wrongly():
+    # the tiled pool (forward-oblique camera: perspective, not a similarity):
+    # every tile shift is a look-alike peak. Pairs may be declined (None), but
+    # what is answered must close its loops: 1->2->3 composed against 1->3
+    folder = data_path("sequences", "subvo_pool_chain")
+    files = sorted(p for p in folder.iterdir() if p.suffix.lower() in (".png", ".jpg"))[:8]
+    frames = [seahough.to_gray(p) for p in files]
+    shape = frames[0].shape
+    pair = [seahough.estimate_motion(frames[i], frames[i + 1]) for i in range(len(frames) - 1)]
+    skip = [seahough.estimate_motion(frames[i], frames[i + 2]) for i in range(len(frames) - 2)]
+    assert sum(m is None for m in pair) >= 2  # the look-alikes are recognised as such
+    for i in range(len(frames) - 2):
+        if pair[i] and pair[i + 1] and skip[i]:
+            assert _max_err(compose(pair[i + 1].matrix, pair[i].matrix), skip[i].matrix,
+                            shape) < 10.0, f"frames {i}-{i + 2}: a confident wrong motion"

@@ -38,6 +38,8 @@ from seahough import (Config, Detector, ImageError, ImageReadError, ImageSizeErr
                       estimate_motion, read_image, to_gray)
 from seahough import simulate as sim
 
+from conftest import seahough_command
+
 #: address-space limit of the command-line subprocesses (a seahough process
 #: peaks at under 1 GiB of virtual memory; a decoded bomb needs far more)
 AS_LIMIT = 4 << 30
@@ -53,18 +55,6 @@ _SLOW = {
 
 
 # ------------------------------------------------------------------ helpers
-def seahough_command() -> Path:
-    """The installed ``seahough`` console script beside ``sys.executable``
-    (as in test_cli.py): the command users run, never ``python -m`` from the
-    source tree; a missing command fails the test instead of falling back."""
-    exe = Path(sys.executable).parent / ("seahough.exe" if os.name == "nt" else "seahough")
-    if not exe.is_file():
-        pytest.fail(f"the seahough command is not installed beside {sys.executable} (no {exe}): "
-                    "install the package into this environment (pip install -e .)",
-                    pytrace=False)
-    return exe
-
-
 def _env(**extra) -> dict:
     env = dict(os.environ)
     env["MPLBACKEND"] = "Agg"
