@@ -279,7 +279,8 @@ def test_not_found_says_why(tmp_path):
 
 def test_angles_near_360_are_printed_wrapped():
     """The table prints the rounded angle in [0, 360) (lines: [0, 180))."""
-    from seahough.cli import _detection_lines, format_angle
+    from seahough.cli import _detection_lines
+    from seahough.geometry import format_angle
 
     assert format_angle(359.998) == "0.00" and format_angle(359.994) == "359.99"
     assert format_angle(359.96, 1) == "0.0" and format_angle(0.004) == "0.00"

@@ -22,6 +22,7 @@ from . import __version__
 from .config import Config
 from .detector import Detector
 from .errors import SeahoughError
+from .geometry import format_angle
 
 PROG = "seahough"
 SHAPES_HELP = ("rect:W,H | line:LENGTH,WIDTH | circle:R | circle:R,INNER (a ring) | "
@@ -190,26 +191,6 @@ def _progress(iterable, total, desc, enabled, unit="img"):
     from tqdm import tqdm
     return tqdm(iterable, total=total, desc=desc, unit=unit, file=sys.stderr, disable=None,
                 leave=False, dynamic_ncols=True)
-
-
-def format_angle(degrees: float, decimals: int = 2, period: float = 360.0) -> str:
-    """``degrees`` as text in ``[0, period)``, wrapped after rounding.
-
-    A value that rounds up to the period is written as 0, so that a
-    printed angle stays in the documented range.
-
-    >>> format_angle(359.998), format_angle(359.998, 1), format_angle(179.97, 1, 180.0)
-    ('0.00', '0.0', '0.0')
-    >>> format_angle(-30.0), format_angle(12.345, 1)
-    ('330.00', '12.3')
-    """
-    a = float(degrees)
-    if not math.isfinite(a):
-        return f"{a}"
-    r = round(a % period, decimals)
-    if r >= period:
-        r -= period
-    return f"{r + 0.0:.{decimals}f}"      # + 0.0: never "-0.00"
 
 
 def _table(rows, header, left=False) -> list[str]:

@@ -126,3 +126,23 @@ def angle_difference(a_deg: float, b_deg: float, period: float = 360.0) -> float
     """Smallest signed difference ``a - b`` in degrees, modulo ``period``."""
     d = (a_deg - b_deg + period / 2) % period - period / 2
     return float(d)
+
+
+def format_angle(degrees: float, decimals: int = 2, period: float = 360.0) -> str:
+    """``degrees`` as text in ``[0, period)``, wrapped after rounding.
+
+    A value that rounds up to the period is written as 0, so that a
+    printed angle stays in the documented range.
+
+    >>> format_angle(359.998), format_angle(359.998, 1), format_angle(179.97, 1, 180.0)
+    ('0.00', '0.0', '0.0')
+    >>> format_angle(-30.0), format_angle(12.345, 1)
+    ('330.00', '12.3')
+    """
+    a = float(degrees)
+    if not math.isfinite(a):
+        return f"{a}"
+    r = round(a % period, decimals)
+    if r >= period:
+        r -= period
+    return f"{r + 0.0:.{decimals}f}"      # + 0.0: never "-0.00"

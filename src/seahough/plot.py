@@ -26,6 +26,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 
+from .geometry import format_angle
+
 __all__ = ["plot_detections", "plot_accumulator", "plot_edges", "plot_trajectory",
            "save_mosaic", "DPI"]
 
@@ -130,8 +132,6 @@ def _line_ends(x, y, angle_deg, w, h):
 def _det_label(d) -> str:
     """``"score 0.87 · conf 0.64 · s 1.23 · 45.0°"`` (angles wrapped after
     rounding: 359.98 is written 0.0)."""
-    from .cli import format_angle
-
     if getattr(d, "kind", "object") == "line" and d.line_angle is not None:
         return (f"score {d.score:.2f} · conf {d.confidence:.2f} · "
                 f"line {format_angle(d.line_angle, 1, 180.0)}° · "
