@@ -140,6 +140,14 @@ def test_known_scale_and_rotation_is_the_fast_2d_case():
     assert d.scale == pytest.approx(truth.scale) and d.angle == pytest.approx(truth.angle % 360)
     assert math.hypot(d.x - truth.x, d.y - truth.y) < 1.0
     assert res.planes.scale_angle.shape == (1, 1)
+    # the 2-D case keeps Config.n_keypoints_2d key points; a search over scales the full N
+    cfg = seahough.Config()
+    assert len(res.features.keypoints) == cfg.n_keypoints_2d < cfg.n_keypoints
+    full = seahough.Detector(pattern, scale_range=(0.5, 2.0)).search(scene)
+    assert len(full.features.keypoints) == cfg.n_keypoints
+    same = seahough.Detector(pattern, (truth.scale, truth.scale), (truth.angle, truth.angle),
+                             config=cfg.replace(n_keypoints_2d=None)).search(scene)
+    assert len(same.features.keypoints) == cfg.n_keypoints
 
 
 @pytest.mark.parametrize("voting", ["oriented", "points", "segments"])
