@@ -743,3 +743,34 @@ def test_sparus_agrees_with_its_camera_poses(real_runs):
                           ("world->camera", "body")):
         wrong = _sparus_comparison(res.rows, folder, reading, axes)
         assert not _sparus_agrees(wrong), (reading, axes, wrong)
+
+
+def _pool_disagreements(tmp_path, config=None):
+    """Frames of the tiled pool whose dead-reckoned step (frame i -> i+1) differs
+    by more than 10 px at the corners from estimate_motion on the same pair."""
+    folder = data_path("sequences", "subvo_pool_chain")
+    files = [str(p) for p in list_frames(folder)]
+    kw = {} if config is None else {"config": config}
+    rows = run_odometry(files, tmp_path, mosaic=False, progress=False, **kw).rows
+    shape = seahough.to_gray(files[0]).shape
+    h, w = shape
+    grid = np.array([[x, y] for x in np.linspace(0, w - 1, 5) for y in np.linspace(0, h - 1, 5)])
+    bad = []
+    for a, b in zip(rows, rows[1:]):
+        if b["status"] != "measured" or a["status"] not in ("origin", "measured"):
+            continue
+        m = seahough.estimate_motion(files[a["index"]], files[b["index"]])
+        if m is None:
+            continue
+        step = compose(np.reshape(b["matrix"], (2, 3)), invert_matrix(np.reshape(a["matrix"], (2, 3))))
+        err = float(np.max(np.hypot(*(apply_matrix(step, grid) - apply_matrix(m.matrix, grid)).T)))
+        if err > 10.0:
+            bad.append((b["index"], round(err, 1), b["method"], b["confidence"]))
+    return bad
+
+
+def test_tile_look_alikes_are_flagged_not_measured(tmp_path):
+    # the tiled pool: a full search that lands on a tile-shifted look-alike of
+    # the keyframe (a 40 px jump where the pair itself says a few px) must be
+    # flagged as low confidence, not accepted (3 peaks per full search did)
+    assert _pool_disagreements(tmp_path) == []
