@@ -94,7 +94,9 @@ class Config:
         A pattern edge point counts as found when an image edge point lies
         within this distance (full-resolution px) after refinement.
     n_candidates : int
-        Accumulator peaks examined (scored and refined) per search.
+        Accumulator peaks examined (scored and refined) per search. The
+        confidence is measured against the best of the others, so fewer
+        peaks make it too high on look-alikes (see ``docs/method.md``).
     refine : bool
         Refine poses below one accumulator bin by least squares on the matched
         edge points (point-to-edge distances), finishing at full resolution.
