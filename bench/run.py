@@ -286,7 +286,7 @@ def report_marker(res):
         tgt = "-"
         if m == "seahough":
             ft = faster_than(recs["moderate"])
-            tgt = "; ".join([verdict(r.success >= 0.95, f"success >= 95 % (moderate)"),
+            tgt = "; ".join([verdict(r.success >= 0.95, "success >= 95 % (moderate)"),
                              verdict(bool(ft), "faster than SIFT+RANSAC")])
         note = ""
         if r.timeouts or h.timeouts or r.skipped or h.skipped:

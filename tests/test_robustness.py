@@ -32,8 +32,7 @@ import cv2
 import numpy as np
 import pytest
 
-import seahough
-from seahough import (Config, Detector, ImageError, ImageReadError, ImageSizeError,
+from seahough import (Config, Detector, ImageReadError, ImageSizeError,
                       ImageValueError, ParameterError, Pattern, PatternError, SeahoughError,
                       estimate_motion, read_image, to_gray)
 from seahough import simulate as sim

@@ -64,7 +64,7 @@ class Config:
         pattern is usually cut from a clear photo while the searched view
         comes through water (blur, scatter, resampling): fine texture that
         the view cannot show would count against a true match. 1.0 measured
-        best on the fragment benchmark (80 % found at 0, 92 % at 1.0); 0
+        best on the fragment benchmark (80 % found at 0, 96 % at 1.0); 0
         turns it off. Shapes and previous frames (which pass through the
         same water as the searched image) are never blurred.
     segment_steps : int

@@ -151,7 +151,6 @@ def line_parameters(x: float, y: float, angle_deg: float, shape) -> tuple[float,
     cx, cy = (w - 1) / 2.0, (h - 1) / 2.0
     a = angle_deg % 180.0
     t = math.radians(a)
-    d = np.array([math.cos(t), -math.sin(t)])   # along the line, as displayed
     n = np.array([math.sin(t), math.cos(t)])    # normal
     off = float(n @ (np.array([x, y]) - [cx, cy]))
     fx, fy = cx + off * n[0], cy + off * n[1]

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -10,7 +9,6 @@ import numpy as np
 from .config import Config
 from .detector import Detector
 from .errors import ParameterError, PatternError
-from .geometry import pose_to_matrix
 from ._validate import number
 from .imageio import MIN_SIDE, to_gray
 from .pattern import Pattern
@@ -132,7 +130,6 @@ def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
     if d.confidence < min_confidence:
         return None
     m = d.matrix
-    corners = np.array([[0, 0], [w - 1, 0], [w - 1, h - 1], [0, h - 1]], float)
     overlap = _overlap(m, w, h)
     angle = (d.angle + 180.0) % 360.0 - 180.0
     return Motion(m, d.x - ox, d.y - oy, angle, d.scale, d.confidence, d.score, overlap)

@@ -385,7 +385,6 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None) -
     anchors = []
     for i, d in enumerate(detections):
         c = COLOURS[i % len(COLOURS)]
-        tag = f"#{i + 1} " if len(detections) > 1 else ""
         if getattr(d, "kind", "object") == "line" and d.line_angle is not None:
             # the rope's two borders, extended across the image (the rope shows
             # between them); the centre line when the outline is missing
