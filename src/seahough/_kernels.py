@@ -474,6 +474,48 @@ def match_points(px, py, pang, a, b, tx, ty, ex, ey, eang, index, radius, ang_to
 
 
 @njit(cache=True)
+def snap_points(x, y, ang, ex, ey, eang, emag, index, radius, ang_tol, either, pen):
+    """For each point (x, y) of direction ``ang``, the edge point of compatible
+    direction within ``radius`` pixels with the largest ``emag / (1 + pen
+    d^2)`` (d: its distance), -1 when there is none: where a blurred edge
+    seen at a coarser scale lies at full resolution (the nearest edge point
+    may be faint texture beside it, the strongest another edge)."""
+    n = x.shape[0]
+    h, w = index.shape
+    out = -np.ones(n, np.int64)
+    r = int(math.ceil(radius))
+    r2 = radius * radius
+    for i in range(n):
+        cx = int(math.floor(x[i] + 0.5))
+        cy = int(math.floor(y[i] + 0.5))
+        best = -1
+        bestm = -1.0
+        for yy in range(max(cy - r, 0), min(cy + r + 1, h)):
+            for xx in range(max(cx - r, 0), min(cx + r + 1, w)):
+                j = index[yy, xx]
+                if j < 0:
+                    continue
+                ddx = ex[j] - x[i]
+                ddy = ey[j] - y[i]
+                if ddx * ddx + ddy * ddy > r2:
+                    continue
+                da = _wrap_pi(eang[j] - ang[i])
+                if either:
+                    if da > 0.5 * math.pi:
+                        da -= math.pi
+                    elif da < -0.5 * math.pi:
+                        da += math.pi
+                if abs(da) > ang_tol:
+                    continue
+                q = emag[j] / (1.0 + (ddx * ddx + ddy * ddy) * pen)
+                if q > bestm:
+                    bestm = q
+                    best = j
+        out[i] = best
+    return out
+
+
+@njit(cache=True)
 def _solve_pose(px, py, ex, ey, enx, eny, w, m, a, b, fix, along):
     """Weighted least squares for (a, b, tx, ty): point-to-edge distances
     plus ``along`` times point-to-point ones (keeps straight edges

@@ -546,9 +546,9 @@ class Detector:
         radius plus the distance it may move the pose could never be matched:
         they are left out (finding them cost as much as the rest of the finish).
         """
-        pf1 = self.pattern.features(1.0, self.config)
+        vx, vy, _ = self.pattern.finish_points(factor, self.config)
         H, W = gray.shape
-        pts = [self._full_pose(c.fit, features).map(pf1.vx, pf1.vy) for c in todo]
+        pts = [self._full_pose(c.fit, features).map(vx, vy) for c in todo]
         band_r = int(math.ceil(self._full_radius(factor) + self._band_slack))
         m = band_r + 4
         boxes = [(int(max(0, math.floor(mx.min()) - m)), int(max(0, math.floor(my.min()) - m)),
@@ -586,14 +586,14 @@ class Detector:
         cfg = self.config
         p = self.pattern
         pose = self._full_pose(fit, features)
-        pf1 = p.features(1.0, cfg)
+        vx, vy, vang = p.finish_points(factor, cfg)
         if factor < 0.999:
             if where is None:  # (a box too small to hold edges)
                 return fit
             (x0, y0, x1, y1), edges, index = where
             H, W = gray.shape
             local = Pose(pose.a, pose.b, pose.tx - x0, pose.ty - y0)
-            f = refine(local, pf1.vx, pf1.vy, pf1.vangle, edges, index,
+            f = refine(local, vx, vy, vang, edges, index,
                        radii=(self._full_radius(factor), 1.5) if cfg.refine else (), iterations=3,
                        angle_tol=math.radians(cfg.angle_tolerance), either=p.either,
                        fix_scale=self.scale_range[0] == self.scale_range[1],
@@ -601,10 +601,10 @@ class Detector:
                        score_radius=cfg.match_radius)
             q = f.pose
             # the share inside the image is measured on the whole image, not the crop
-            mx, my = Pose(q.a, q.b, q.tx + x0, q.ty + y0).map(pf1.vx, pf1.vy)
+            mx, my = Pose(q.a, q.b, q.tx + x0, q.ty + y0).map(vx, vy)
             inside = float(np.mean((mx >= 0) & (my >= 0) & (mx <= W - 1) & (my <= H - 1)))
             return Fit(Pose(q.a, q.b, q.tx + x0, q.ty + y0), f.score, f.matched, f.rms, inside)
-        return refine(pose, pf1.vx, pf1.vy, pf1.vangle, features.edges, features.index,
+        return refine(pose, vx, vy, vang, features.edges, features.index,
                       radii=(1.0,) if cfg.refine else (), angle_tol=math.radians(cfg.angle_tolerance),
                       either=p.either, fix_scale=self.scale_range[0] == self.scale_range[1],
                       fix_angle=self.angle_range[0] == self.angle_range[1],

@@ -147,7 +147,8 @@ def content_box(gray: np.ndarray, margin: int = 2) -> tuple[int, int, int, int]:
     and ``margin`` pixels more. Static edges there would vote for "no
     motion" in every pair."""
     h, w = gray.shape
-    interior = gray[h // 4: 3 * h // 4, w // 4: 3 * w // 4]
+    # (every third pixel: as good a level, a tenth of the time)
+    interior = gray[h // 4: 3 * h // 4: 3, w // 4: 3 * w // 4: 3]
     level = float(np.median(interior))
 
     def depth(lines) -> int:

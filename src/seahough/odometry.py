@@ -63,10 +63,10 @@ __all__ = ["run_odometry", "list_frames", "read_odometry_csv", "time_from_name",
            "ODOMETRY_CONFIG", "IMAGE_EXTENSIONS", "VIDEO_EXTENSIONS"]
 
 #: Search configuration used unless ``config`` is given: the motion
-#: configuration with the pattern-point counts of the default Config (so the
-#: full-resolution pattern features a frame pattern computes when it is built
-#: are the ones the search uses), and its seven accumulator peaks per full
-#: search (two in the small prior window). Three peaks per full search
+#: configuration with the pattern-point counts of the default Config (fewer
+#: than estimate_motion's: a keyframe is searched many times, from a
+#: prediction), and its seven accumulator peaks per full search (two in the
+#: small prior window). Three peaks per full search
 #: accepted tile-shifted look-alikes on the tiled pool sequence (40 px jumps
 #: at confidence 0.28-0.32) that seven flag as low confidence.
 ODOMETRY_CONFIG = MOTION_CONFIG.replace(n_pattern_points=128, n_verify_points=400)
@@ -92,6 +92,10 @@ _PRIOR_ANGLE = 4.0          # prior rotation window, +- degrees
 _PRIOR_SCALE = 1.03         # prior scale window, x/÷
 _PRIOR_CANDIDATES = 2       # accumulator peaks examined in the prior window
 _FULL_SHIFT = 0.5           # full search: +- this share of the frame around the last position
+_DOUBTFUL = 0.35            # a keyframe measurement less confident than this is checked
+                            # against the last measured frame (nearer in time) ...
+_AGREE_BINS = 2.0           # ... which replaces it when they differ by more than this many
+                            # translation bins at the frame's corners and it is more confident
 _MAX_SPAN = 3               # ... and the ranges widened for at most this many frames of gap
 
 _CSV_BASE = ["index", "file", "time", "x", "y", "heading", "scale", "confidence", "flags"]
@@ -475,7 +479,7 @@ def _advance(st: _State, row: dict) -> None:
         return
     # measured
     ref = row["ref"]
-    ref_cum = st.key_cum if ref == st.key else st.prev_cum
+    ref_cum = _ref_cum(st, ref)
     if st.last_pose_measured and st.last_pose is not None:
         st.vel = _power(compose(cum, invert_matrix(st.last_pose_cum)), 1.0 / (i - st.last_pose))
     else:
@@ -517,10 +521,10 @@ class _Frame:
     pattern: Pattern | None = None
     failed: bool = False
 
-    def get_pattern(self):
+    def get_pattern(self, config: Config):
         if self.pattern is None and not self.failed:
             try:
-                self.pattern = Pattern.from_frame(self.gray)
+                self.pattern = Pattern.from_frame(self.gray, config=config)
             except SeahoughError:
                 self.failed = True
         return self.pattern
@@ -593,7 +597,7 @@ class _Searcher:
         ``predicted``: the expected motion (prior window around it); else
         ``base`` (the motion to the last measured frame) and the user's
         ranges widened over ``n`` frames."""
-        pattern = ref.get_pattern()
+        pattern = ref.get_pattern(self.cfg)
         if pattern is None:
             return None, "no_motion"
         h, w = self.shape
@@ -942,6 +946,12 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     3. ``previous``: against the previous readable frame (when it is not
        the keyframe), full search; it then becomes the keyframe.
 
+    A keyframe measurement of confidence below 0.35 (an old keyframe, or a
+    look-alike of it: a tile or a ripple one period on) is checked by a full
+    search against the last measured frame, nearer in time; that one
+    (method ``previous``) replaces it when the two differ by more than two
+    translation bins at the frame's corners and it is more confident.
+
     Each must be confident (>= 0.2), find >= 20 % of the reference's edges,
     keep >= 15 % overlap, and match the edges in view at least 0.4 times as
     well as the last measured frames did (an unrelated frame, a fish, silt).
@@ -1149,14 +1159,44 @@ def _measure_frame(row, i, gray, st: _State, searcher: _Searcher, load):
             "little_overlap" if "little_overlap" in reasons else "no_motion")
         row["flags"] = f"{why}; pose_assumed: zero motion since frame {st.meas}"
         return
-    ref_cum = st.key_cum if res.ref == st.key else st.prev_cum
+    if (res.ref == st.key and res.confidence < _DOUBTFUL and st.meas is not None
+            and st.meas != st.key):
+        res = _checked(res, i, gray, feats, st, searcher, load, ref_rate)
     row["status"] = "measured"
-    row["_cum"] = compose(res.matrix, ref_cum)
+    row["_cum"] = compose(res.matrix, _ref_cum(st, res.ref))
     row["ref"] = res.ref
     row["method"] = res.method
     row["confidence"] = res.confidence
     row["score"] = res.score
     row["overlap"] = res.overlap
+
+
+def _ref_cum(st: _State, ref: int) -> np.ndarray:
+    """The cumulative matrix of a reference frame (the keyframe, the last
+    measured frame or the previous frame)."""
+    if ref == st.key:
+        return st.key_cum
+    return st.meas_cum if ref == st.meas else st.prev_cum
+
+
+def _checked(res, i, gray, feats, st: _State, searcher: _Searcher, load, ref_rate):
+    """A doubtful keyframe measurement against the last measured frame: an
+    old keyframe's peak can be a look-alike (a tile, a ripple one period on)
+    that the nearer frame does not share. The nearer frame's measurement
+    replaces it when the two disagree and it is more confident."""
+    # a full search: in the small prior window a look-alike has only one
+    # runner-up to be measured against (on the tiled pool it confirmed itself)
+    n = i - st.meas
+    check, _ = searcher.measure(load(st.meas), gray, feats, None, _IDENTITY, n, "previous",
+                                ref_rate)
+    if check is None or check.confidence <= res.confidence:
+        return res
+    implied = compose(res.matrix, compose(st.key_cum, invert_matrix(st.meas_cum)))
+    h, w = st.shape
+    grid = np.array([[0.0, 0.0], [w - 1.0, 0.0], [0.0, h - 1.0], [w - 1.0, h - 1.0]])
+    gap = float(np.max(np.hypot(*(apply_matrix(implied, grid) - apply_matrix(check.matrix, grid)).T)))
+    step = (searcher.cfg.translation_bin or 6.0) / searcher.factor
+    return check if gap > _AGREE_BINS * step else res
 
 
 def _metric(row, shape, mpp):
@@ -1254,6 +1294,7 @@ def _summary(t: _Totals, items, mpp, scale_range, angle_range, cfg, n_resumed, w
             "min_relative_match": _MIN_RELATIVE,
             "min_overlap": _MIN_OVERLAP, "rekey_overlap": _REKEY_OVERLAP,
             "rekey_match": _REKEY_MATCH,
+            "doubtful_keyframe_check": {"below_confidence": _DOUBTFUL, "agree_bins": _AGREE_BINS},
             "prior_window": {"radius_share": _PRIOR_RADIUS, "min_bins": _PRIOR_BINS,
                              "angle_deg": _PRIOR_ANGLE, "scale": _PRIOR_SCALE},
             "config": dataclasses.asdict(cfg),
