@@ -17,7 +17,9 @@ class EdgePoints:
 
     ``x``, ``y`` are sub-pixel positions (working pixels), ``angle`` the
     gradient direction in radians [0, 2 pi), ``magnitude`` its strength,
-    ``ix``, ``iy`` the pixel each point belongs to, ``shape`` the image's.
+    ``ix``, ``iy`` the pixel each point belongs to, ``shape`` the image's;
+    ``nx``, ``ny`` the unit gradient (cosine and sine of ``angle``, from the
+    gradient itself; computed from ``angle`` when not given).
     """
 
     x: np.ndarray
@@ -28,6 +30,13 @@ class EdgePoints:
     iy: np.ndarray
     shape: tuple[int, int]
     index: np.ndarray | None = field(default=None, repr=False)
+    nx: np.ndarray | None = field(default=None, repr=False)
+    ny: np.ndarray | None = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        if self.nx is None or self.ny is None:
+            self.nx = np.cos(self.angle).astype(np.float32)
+            self.ny = np.sin(self.angle).astype(np.float32)
 
     def __len__(self) -> int:
         return int(self.x.shape[0])
@@ -67,10 +76,10 @@ def find_edge_points(grad: Gradients, min_gradient: float,
     """
     phase = cv2.phase(grad.gx, grad.gy)  # [0, 2 pi), vectorised (about 0.3 deg accurate)
     mask = _NO_MASK if mask is None else np.ascontiguousarray(mask, np.uint8)
-    x, y, a, m, ix, iy, index = K.edge_points(grad.magnitude, grad.gx, grad.gy, phase,
-                                              np.float32(min_gradient), mask)
+    x, y, a, m, ix, iy, index, nx, ny = K.edge_points(grad.magnitude, grad.gx, grad.gy, phase,
+                                                      np.float32(min_gradient), mask)
     a[a >= np.float32(2 * np.pi)] = 0.0
-    return EdgePoints(x, y, a, m, ix, iy, grad.magnitude.shape, index)
+    return EdgePoints(x, y, a, m, ix, iy, grad.magnitude.shape, index, nx, ny)
 
 
 def contrast_threshold(magnitude: np.ndarray, n: int, bins: int = 1024) -> float:

@@ -80,8 +80,8 @@ def refine(pose: Pose, vx, vy, vang, edges: EdgePoints, index: np.ndarray, *,
     """
     a, b, tx, ty, score, matched, rms, inside = K.icp(
         vx, vy, vang, float(pose.a), float(pose.b), float(pose.tx), float(pose.ty),
-        edges.x, edges.y, edges.angle, index, np.asarray(radii, np.float64), int(iterations),
-        float(angle_tol), bool(either), bool(fix_scale), bool(fix_angle), float(along),
+        edges.x, edges.y, edges.angle, edges.nx, edges.ny, index, np.asarray(radii, np.float64),
+        int(iterations), float(angle_tol), bool(either), bool(fix_scale), bool(fix_angle), float(along),
         float(score_radius), float(min_scale))
     return Fit(Pose(float(a), float(b), float(tx), float(ty)), float(score), int(matched),
                float(rms), float(inside))
