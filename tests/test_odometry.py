@@ -747,7 +747,8 @@ def test_sparus_agrees_with_its_camera_poses(real_runs):
 
 def _pool_disagreements(tmp_path, config=None):
     """Frames of the tiled pool whose dead-reckoned step (frame i -> i+1) differs
-    by more than 10 px at the corners from estimate_motion on the same pair."""
+    by more than 10 px at the corners from estimate_motion on the same pair
+    (where that is confident)."""
     folder = data_path("sequences", "subvo_pool_chain")
     files = [str(p) for p in list_frames(folder)]
     kw = {} if config is None else {"config": config}
@@ -760,8 +761,10 @@ def _pool_disagreements(tmp_path, config=None):
         if b["status"] != "measured" or a["status"] not in ("origin", "measured"):
             continue
         m = seahough.estimate_motion(files[a["index"]], files[b["index"]])
-        if m is None:
-            continue
+        if m is None or m.confidence < 0.2:
+            continue  # no reference (below 0.2 a detection is flagged ambiguous: on this
+            # pool estimate_motion once answered a 37 px jump at 0.17 between two frames
+            # that every other pair says moved a few px)
         step = compose(np.reshape(b["matrix"], (2, 3)), invert_matrix(np.reshape(a["matrix"], (2, 3))))
         err = float(np.max(np.hypot(*(apply_matrix(step, grid) - apply_matrix(m.matrix, grid)).T)))
         if err > 10.0:

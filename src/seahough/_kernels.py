@@ -104,13 +104,14 @@ def edge_points(mag, gx, gy, phase, floor, mask):
 
 
 @njit(cache=True)
-def trace_segments(seeds, ix, iy, ang, mag, index, steps, tol):
+def trace_segments(seeds, ix, iy, ang, nxs, nys, mag, index, steps, tol):
     """Trace a short segment along the edge from each seed edge point.
 
     From a key point, step to the 8-neighbour that lies along the edge
     (perpendicular to the gradient), is an edge point with about the same
     gradient direction (within ``tol``) and has the highest magnitude; repeat
-    ``steps`` times on each side.
+    ``steps`` times on each side. ``nxs, nys`` are the points' unit gradients
+    (cosine and sine of ``ang``).
 
     Returns ``(seed, end1, end2, mean_angle, length)`` for the seeds from
     which at least two steps could be taken; ``end1``/``end2`` are edge point
@@ -123,12 +124,14 @@ def trace_segments(seeds, ix, iy, ang, mag, index, steps, tol):
     out_e2 = np.empty(n, np.int32)
     out_ang = np.empty(n, np.float32)
     out_len = np.empty(n, np.int32)
+    diag = 0.38 * math.sqrt(2.0)
     k = 0
     for si in range(n):
         s = seeds[si]
-        sc = math.cos(ang[s])
-        ss = math.sin(ang[s])
-        ends = np.empty(2, np.int32)
+        sc = nxs[s]
+        ss = nys[s]
+        e1 = s
+        e2 = s
         total = 0
         for side in range(2):
             sign = 1.0 if side == 0 else -1.0
@@ -138,22 +141,28 @@ def trace_segments(seeds, ix, iy, ang, mag, index, steps, tol):
             for _ in range(steps):
                 cx = ix[cur]
                 cy = iy[cur]
+                acur = ang[cur]
                 best = -1
                 bestm = -1.0
                 for dy in range(-1, 2):
                     for dx in range(-1, 2):
                         if dx == 0 and dy == 0:
                             continue
-                        if dx * tx + dy * ty <= 0.38 * math.sqrt(dx * dx + dy * dy):
+                        if dx * tx + dy * ty <= (diag if dx != 0 and dy != 0 else 0.38):
                             continue
-                        nx = cx + dx
-                        ny = cy + dy
-                        if nx < 0 or ny < 0 or nx >= w or ny >= h:
+                        qx = cx + dx
+                        qy = cy + dy
+                        if qx < 0 or qy < 0 or qx >= w or qy >= h:
                             continue
-                        j = index[ny, nx]
+                        j = index[qy, qx]
                         if j < 0:
                             continue
-                        if abs(_wrap_pi(ang[j] - ang[cur])) > tol:
+                        da = ang[j] - acur  # both in [0, 2 pi): one wrap
+                        if da >= math.pi:
+                            da -= TWO_PI
+                        elif da < -math.pi:
+                            da += TWO_PI
+                        if abs(da) > tol:
                             continue
                         if mag[j] > bestm:
                             bestm = mag[j]
@@ -161,22 +170,25 @@ def trace_segments(seeds, ix, iy, ang, mag, index, steps, tol):
                 if best < 0:
                     break
                 # keep walking the same way along the (possibly curving) edge
-                ntx = -math.sin(ang[best])
-                nty = math.cos(ang[best])
+                ntx = -nys[best]
+                nty = nxs[best]
                 if ntx * tx + nty * ty < 0:
                     ntx = -ntx
                     nty = -nty
                 tx = ntx
                 ty = nty
-                sc += math.cos(ang[best])
-                ss += math.sin(ang[best])
+                sc += nxs[best]
+                ss += nys[best]
                 cur = best
                 total += 1
-            ends[side] = cur
+            if side == 0:
+                e1 = cur
+            else:
+                e2 = cur
         if total >= 2:
             out_seed[k] = s
-            out_e1[k] = ends[0]
-            out_e2[k] = ends[1]
+            out_e1[k] = e1
+            out_e2[k] = e2
             a = math.atan2(ss, sc)
             if a < 0.0:
                 a += TWO_PI

@@ -68,7 +68,7 @@ def trace_segments(edges: EdgePoints, keypoint_ids: np.ndarray, steps: int = 2,
         index = edges.index_map()
     seed, e1, e2, ang, ln = K.trace_segments(
         np.ascontiguousarray(keypoint_ids, np.int32), edges.ix, edges.iy, edges.angle,
-        edges.magnitude, index, int(steps), math.radians(angle_tol_deg))
+        edges.nx, edges.ny, edges.magnitude, index, int(steps), math.radians(angle_tol_deg))
     mag = edges.magnitude[seed]
     if seed.size > max_segments:
         keep = np.sort(np.argpartition(-mag, max_segments - 1)[:max_segments])
