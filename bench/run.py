@@ -1120,11 +1120,12 @@ def findings(results) -> str:
             fast = "faster" if sp["ms"] < sps["ms"] else "slower"
             txt += (f"On the small 384x288 Sparus frames seahough ({ms_fmt(sp['ms'])} ms) is "
                     f"{fast} than SIFT+RANSAC ({ms_fmt(sps['ms'])} ms): SIFT finds few key points "
-                    "there, while seahough's time has a floor (a 320 px working image, 256 "
-                    "pattern points, the previous frame's features at two scales, candidate "
-                    "refinement and a full-resolution refinement). In a dead-reckoning run "
+                    "there, while seahough's time has a floor (both frames' features on a 320 "
+                    "px working image, 256 pattern points, seven candidate poses refined "
+                    "to tell the true peak from its runner-up, then a full-resolution "
+                    "refinement). In a dead-reckoning run "
                     "(run_odometry) the previous frame's features are reused and the last "
-                    "motion narrows the search: 8-10 ms a pair on these frames (docs/odometry.md).")
+                    "motion narrows the search: about 7 ms a pair on these frames (docs/odometry.md).")
         out.append(txt)
     return "\n".join(out)
 
