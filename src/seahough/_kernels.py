@@ -20,12 +20,6 @@ MODE_POINTS = 1
 MODE_SEGMENTS = 2
 
 
-@njit(cache=True)
-def _wrap_pi(a):
-    """Angle wrapped to [-pi, pi)."""
-    return (a + math.pi) % TWO_PI - math.pi
-
-
 # --------------------------------------------------------------------------- edges
 @njit(cache=True, fastmath=True)
 def edge_points(mag, gx, gy, phase, floor, mask):
@@ -425,6 +419,24 @@ def local_maxima(plane, radius):
 
 
 # --------------------------------------------------------------------------- matching
+@njit(cache=True, inline="always")
+def _same_direction(a, b, tol, either):
+    """Do directions ``a`` and ``b`` (radians, both in [0, 2 pi)) differ by at
+    most ``tol`` (``either``: or by pi plus at most ``tol``)? Their difference
+    wraps with one comparison (``fmod`` was a fifth of the ICP's time)."""
+    da = a - b
+    if da >= math.pi:
+        da -= TWO_PI
+    elif da < -math.pi:
+        da += TWO_PI
+    if either:
+        if da > 0.5 * math.pi:
+            da -= math.pi
+        elif da < -0.5 * math.pi:
+            da += math.pi
+    return abs(da) <= tol
+
+
 @njit(cache=True)
 def match_points(px, py, pang, a, b, tx, ty, ex, ey, eang, index, radius, ang_tol, either):
     """For each pattern point mapped by the pose, the nearest image edge point
@@ -449,8 +461,7 @@ def match_points(px, py, pang, a, b, tx, ty, ex, ey, eang, index, radius, ang_to
         cy = int(math.floor(y + 0.5))
         if cx < -r or cy < -r or cx >= w + r or cy >= h + r:
             continue
-        # the wanted direction in [0, 2 pi), as the edges' are: their
-        # difference then wraps with one comparison (fmod was a fifth of ICP)
+        # the wanted direction in [0, 2 pi), as the edges' are (_same_direction)
         want = pang[i] - phi
         want -= TWO_PI * math.floor(want / TWO_PI)
         bestd = r2 + 1e-9
@@ -479,17 +490,7 @@ def match_points(px, py, pang, a, b, tx, ty, ex, ey, eang, index, radius, ang_to
                     d2 = ddx * ddx + ddy * ddy
                     if d2 >= bestd:
                         continue
-                    da = eang[j] - want
-                    if da >= math.pi:
-                        da -= TWO_PI
-                    elif da < -math.pi:
-                        da += TWO_PI
-                    if either:
-                        if da > 0.5 * math.pi:
-                            da -= math.pi
-                        elif da < -0.5 * math.pi:
-                            da += math.pi
-                    if abs(da) > ang_tol:
+                    if not _same_direction(eang[j], want, ang_tol, either):
                         continue
                     bestd = d2
                     best = j
@@ -525,13 +526,7 @@ def snap_points(x, y, ang, ex, ey, eang, emag, index, radius, ang_tol, either, p
                 ddy = ey[j] - y[i]
                 if ddx * ddx + ddy * ddy > r2:
                     continue
-                da = _wrap_pi(eang[j] - ang[i])
-                if either:
-                    if da > 0.5 * math.pi:
-                        da -= math.pi
-                    elif da < -0.5 * math.pi:
-                        da += math.pi
-                if abs(da) > ang_tol:
+                if not _same_direction(eang[j], ang[i], ang_tol, either):
                     continue
                 q = emag[j] / (1.0 + (ddx * ddx + ddy * ddy) * pen)
                 if q > bestm:
