@@ -251,17 +251,14 @@ def _narrow_scene():
     return img
 
 
-@pytest.mark.parametrize("n", [2, 1, 0])
-def test_narrow_image_labels_stay_inside_the_figure_and_off_the_axes(tmp_path, n):
+def _check_notes_layout(path, img, dets, pattern):
+    """plot_detections' notes (list, "not found", the pattern) lie inside the
+    figure, on the image or clear of it, and off its ticks and axis labels."""
     from matplotlib.offsetbox import AnchoredOffsetbox
 
-    img = _narrow_scene()
-    pattern = seahough.Pattern.rectangle(20, 20)
-    dets = seahough.Detector(pattern, max_results=2).detect(img)[:n] if n else []
-    assert len(dets) == n
-    fig = plot.plot_detections(img, dets, tmp_path / "tall.png", pattern=pattern,
-                               title=f"tall.png: {n}")
-    im = read_png(tmp_path / "tall.png")
+    n = len(dets)
+    fig = plot.plot_detections(img, dets, path, pattern=pattern, title=f"{path.name}: {n}")
+    im = read_png(path)
     assert (im.shape[1], im.shape[0]) == plot.detections_size(img.shape)
     renderer = fig.canvas.get_renderer()
     ax = fig.axes[0]
@@ -275,8 +272,11 @@ def test_narrow_image_labels_stay_inside_the_figure_and_off_the_axes(tmp_path, n
               if t.get_text() == "not found" or "score" in t.get_text()]
     assert notes                                      # the labels or the note are drawn
     image = ax.get_window_extent(renderer)            # the image as drawn
-    for a in notes:
-        bb = a.get_window_extent(renderer)
+    insets = [a for a in fig.axes[1:]] + [a for a in ax.child_axes]
+    assert len(insets) == 1                           # the pattern is shown
+    boxes = [a.get_window_extent(renderer) for a in notes] + [
+        a.get_tightbbox(renderer) for a in insets]
+    for bb in boxes:
         assert (bb.x0 >= fig_box.x0 - 0.5 and bb.x1 <= fig_box.x1 + 0.5 and
                 bb.y0 >= fig_box.y0 - 0.5 and bb.y1 <= fig_box.y1 + 0.5), bb
         # on the image, or clear of it, its ticks and its axis labels
@@ -285,9 +285,41 @@ def test_narrow_image_labels_stay_inside_the_figure_and_off_the_axes(tmp_path, n
         assert inside or not bb.overlaps(image), (bb, image)
         for t in ticks:
             assert not bb.overlaps(t), (bb, t)
+    for i, a in enumerate(boxes):                     # and off each other
+        for b in boxes[i + 1:]:
+            assert not a.overlaps(b), (a, b)
     for t in ax.texts + fig.texts:
         if t.get_text():
             assert t.get_fontsize() >= 10                    # readable
+    return fig
+
+
+@pytest.mark.parametrize("n", [2, 1, 0])
+def test_narrow_image_labels_stay_inside_the_figure_and_off_the_axes(tmp_path, n):
+    img = _narrow_scene()
+    pattern = seahough.Pattern.rectangle(20, 20)
+    dets = seahough.Detector(pattern, max_results=2).detect(img)[:n] if n else []
+    assert len(dets) == n
+    _check_notes_layout(tmp_path / "tall.png", img, dets, pattern)
+
+
+@pytest.mark.parametrize("n", [3, 1, 0])
+def test_short_strip_notes_go_under_it(tmp_path, n):
+    # a 900 x 60 strip: its list of three labels once overflowed the image,
+    # over the third marker, with the pattern inset on top of the list
+    img = np.full((60, 900), 40, np.uint8)
+    for x in (100, 400, 700):
+        cv2.rectangle(img, (x, 20), (x + 19, 39), 220, -1)
+    pattern = seahough.Pattern.rectangle(20, 20)
+    dets = seahough.Detector(pattern, max_results=3).detect(img)[:n] if n else []
+    assert len(dets) == n
+    fig = _check_notes_layout(tmp_path / "strip.png", img, dets, pattern)
+    # all of them below the image (nothing crammed into its 60 px)
+    renderer = fig.canvas.get_renderer()
+    image = fig.axes[0].get_window_extent(renderer)
+    for a in fig.axes[1:]:
+        assert a.get_tightbbox(renderer).y1 < image.y0
+    assert plot.detections_size(img.shape) == (1000, 340)
 
 
 def test_trajectory_truth_and_estimate_both_show(tmp_path):

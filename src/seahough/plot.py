@@ -46,6 +46,10 @@ _VOTES = "votes per pattern point (2x2 bins pooled: can exceed 1)"
 _IMAGE_BOX = 900        # longer side of an image drawn by plot_detections, px
 _MARGINS = (75, 25, 45, 55)   # left, right, bottom, top margins around it, px
 _MIN_WIDTH = 560
+#: Smallest height of the image box: a strip shorter than this when drawn
+#: (e.g. 900 x 60) has its notes (list, "not found", pattern) below it.
+_MIN_BOX_HEIGHT = 240
+_UNDER_AXIS = 48        # px below a drawn image taken by its x ticks and label
 
 
 # --------------------------------------------------------------------------- helpers
@@ -103,16 +107,19 @@ def detections_size(shape) -> tuple[int, int]:
     for an image of ``shape`` (height, width, ...).
 
     The image is drawn 900 px on its longer side, plus margins for the axes
-    and title (75 + 25 px across, 45 + 55 px down), at least 560 px wide.
+    and title (75 + 25 px across, 45 + 55 px down), at least 560 px wide and
+    with at least 240 px for the image and what goes under a short strip.
 
     >>> detections_size((480, 640))
     (1000, 775)
+    >>> detections_size((60, 900))
+    (1000, 340)
     """
     h, w = int(shape[0]), int(shape[1])
     s = _IMAGE_BOX / max(h, w)
     iw, ih = max(1, round(w * s)), max(1, round(h * s))
     left, right, bottom, top = _MARGINS
-    return max(_MIN_WIDTH, iw + left + right), ih + bottom + top
+    return max(_MIN_WIDTH, iw + left + right), max(ih, _MIN_BOX_HEIGHT) + bottom + top
 
 
 def _line_ends(x, y, angle_deg, w, h):
@@ -263,8 +270,17 @@ def _image_px(shape_wh, box_wh) -> tuple[float, float]:
     return w * s, h * s
 
 
+def _short_strip(w, h, box_w, box_h) -> bool:
+    """Is the drawn image so much shorter than its box that its notes go
+    under it (see :data:`_MIN_BOX_HEIGHT`)?"""
+    return box_h - _image_px((w, h), (box_w, box_h))[1] >= _UNDER_AXIS + 60
+
+
 def _fits_beside_object(fig, text, w, h, box_w, box_h) -> bool:
-    """Whether a single detection's boxed label fits across the drawn image."""
+    """Whether a single detection's boxed label fits across the drawn image
+    (a short strip's labels go under it)."""
+    if _short_strip(w, h, box_w, box_h):
+        return False
     tw, _ = _text_size(fig, text, **_LIST_TEXT)
     return tw + _LIST_PAD <= 0.96 * _image_px((w, h), (box_w, box_h))[0]
 
@@ -294,6 +310,13 @@ def _notes(fig, ax, detections, pattern, corners, wh, box_wh):
     x_side = left + dw + 14                     # the image drawn on the left
     side_w = fw - x_side - 8
     top_px = bottom + box_wh[1] / 2 + dh / 2    # the image's top edge
+    if _short_strip(*wh, *box_wh):
+        # the box is taller than the image: the image at the top, the notes
+        # under its x axis
+        ax.set_anchor("N")
+        _notes_below(fig, items, pattern, (left, bottom + box_wh[1] - dh - _UNDER_AXIS),
+                     fw - left - 8, nf_size)
+        return
     if not inside and side_w >= 120:
         ax.set_anchor("W")
         y = top_px
@@ -337,6 +360,31 @@ def _notes(fig, ax, detections, pattern, corners, wh, box_wh):
         _pattern_inset(ax, pattern, corners[0])
 
 
+def _notes_below(fig, items, pattern, top_left, width, nf_size):
+    """The detection list (or "not found") and the pattern, side by side,
+    their tops at ``top_left`` (figure px), within ``width`` px."""
+    fw, fh = fig.get_size_inches() * fig.dpi
+    x, y = top_left
+    room = y - 8                                  # px down to the figure's bottom
+    if items:
+        items = [(_wrap_label(fig, t, width - _LIST_PAD - 150), c) for t, c in items]
+        _label_list(fig.axes[0], items, at=(x / fw, y / fh))
+        x += _list_size(fig, items)[0] + 14
+    elif not items:
+        size = nf_size
+        while size > 12 and 2.3 * size * DPI / 72 > room:
+            size -= 2
+        pad = 0.4 * size * DPI / 72
+        fig.text((x + pad) / fw, (y - pad) / fh, "not found", ha="left", va="top",
+                 fontsize=size, fontweight="bold", color="white", path_effects=_TEXT_OUTLINE,
+                 bbox=dict(boxstyle="round,pad=0.4", fc="#b00020", ec="white", alpha=0.8))
+        x += _text_size(fig, "not found", fontsize=size, fontweight="bold")[0] + 2 * pad + 14
+    if pattern is not None:
+        ph, pw = pattern.image.shape
+        side = max(min(room - 16, width - (x - top_left[0])), 8.0)  # 16: the title above it
+        _pattern_beside(fig, pattern, x, y, side if pw >= ph else side * pw / ph)
+
+
 # ------------------------------------------------------------------------ detections
 def plot_detections(image, detections, path=None, *, pattern=None, title=None) -> Figure:
     """The image with each detection's outline, origin and numbers.
@@ -356,8 +404,9 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None) -
         farthest from them; an empty list writes "not found" across the
         image. When an image is too narrow for them (a tall strip), the
         image is drawn on the left and the labels (wrapped as needed), the
-        note and the pattern go in the space on its right, so that nothing
-        spills onto the axes.
+        note and the pattern go in the space on its right; under a short
+        strip (drawn less than 240 px high, e.g. 900 x 60), they go below
+        it: nothing spills onto the axes.
     path : str or Path, optional
         Where to save the PNG.
     pattern : Pattern, optional
