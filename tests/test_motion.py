@@ -111,3 +111,41 @@ def test_real_sequence_answers_are_right_or_none():
     shape, pair, skip = _loops(data_path("sequences", "sparus_auv_seabed"), 8)
     assert all(m is not None for m in pair)
     _assert_answers_close_their_loops(shape, pair, skip, 3.0)
+
+
+def _faint_frame(dx, step, sigma):
+    """Rectangles a few grey levels off the background, blurred: edges that
+    the downscaled working image shows and the full-resolution image may not."""
+    import cv2
+    img = np.full((480, 640), 100, np.float32)
+    for k in range(12):
+        x, y = 60 + 45 * k + dx, 80 + (k % 4) * 90
+        cv2.rectangle(img, (x, y), (x + 30, y + 40), 100 + (step if k % 2 else -step), -1)
+    return np.clip(cv2.GaussianBlur(img, (0, 0), sigma), 0, 255).astype(np.uint8)
+
+
+@pytest.mark.parametrize("step, full_edges", [(8, False), (14, True)])
+def test_frames_faint_at_full_resolution_are_still_measured(tmp_path, step, full_edges):
+    # a frame pattern is checked at its working scale; its full-resolution
+    # finishing points are snapped onto full-resolution edges. With none there
+    # (step 8) the search once raised ValueError (an empty point set); with
+    # too few snapped (step 14) the full features at scale 1 take over
+    from seahough.errors import PatternError
+    from seahough.odometry import ODOMETRY_CONFIG, run_odometry
+    a, b = _faint_frame(0, step, 3.0), _faint_frame(6, step, 3.0)
+    p = seahough.Pattern.from_frame(a, config=ODOMETRY_CONFIG)
+    working = p.features(0.5, ODOMETRY_CONFIG).vx.size
+    assert p._snap_to_full(0.5, ODOMETRY_CONFIG)[0].size < 0.5 * working
+    if full_edges:
+        full = p.features(1.0, ODOMETRY_CONFIG)
+        assert p.finish_points(0.5, ODOMETRY_CONFIG)[0].size == full.vx.size
+    else:
+        with pytest.raises(PatternError):
+            p.features(1.0, ODOMETRY_CONFIG)
+        assert p.finish_points(0.5, ODOMETRY_CONFIG)[0].size < 8
+    m = seahough.estimate_motion(a, b)
+    assert m is not None and abs(m.dx - 6.0) < 1.0 and abs(m.dy) < 1.0, m
+    frames = [_faint_frame(6 * i, step, 3.0) for i in range(4)]
+    rows = run_odometry(frames, tmp_path, mosaic=False, progress=False).rows
+    assert [r["status"] for r in rows] == ["origin", "measured", "measured", "measured"]
+    assert abs(rows[-1]["x"] - rows[0]["x"] + 18.0) < 2.0    # the scene moved +6 px a frame

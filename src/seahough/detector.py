@@ -17,7 +17,7 @@ from .errors import ParameterError
 from .features import Features, extract_features
 from .geometry import apply_matrix, pose_to_matrix
 from .imageio import to_gray
-from .keypoints import find_edge_points
+from .keypoints import edge_points_near
 from .pattern import Pattern
 from .preprocess import choose_factor, compute_gradients
 from .refine import Fit, Pose, refine
@@ -527,6 +527,10 @@ class Detector:
         tx, ty = features.gradients.to_full(fit.pose.tx, fit.pose.ty)
         return Pose(fit.pose.a, fit.pose.b, float(tx), float(ty))
 
+    #: Fewer full-resolution finishing points than this: the working-scale
+    #: pose is the answer (a frame too faint or blurred at full resolution).
+    _min_finish_points = 8
+
     #: Pose change the full-resolution refinement is allowed beyond its
     #: first match radius (px) when its edges are limited to a band.
     _band_slack = 2.0
@@ -547,6 +551,8 @@ class Detector:
         they are left out (finding them cost as much as the rest of the finish).
         """
         vx, vy, _ = self.pattern.finish_points(factor, self.config)
+        if vx.size < self._min_finish_points:  # (no edges at full resolution)
+            return [None] * len(todo)
         H, W = gray.shape
         pts = [self._full_pose(c.fit, features).map(vx, vy) for c in todo]
         band_r = int(math.ceil(self._full_radius(factor) + self._band_slack))
@@ -562,21 +568,15 @@ class Detector:
         else:
             groups = [(b, [i]) for i, b in enumerate(boxes)]
         out = [None] * len(todo)
-        k = 2 * band_r + 1
         for box, members in groups:
             x0, y0, x1, y1 = box
             if x1 - x0 < 8 or y1 - y0 < 8:
                 continue
             grad = compute_gradients(np.ascontiguousarray(gray[y0:y1, x0:x1]), 1.0,
                                      self.config.equalize)
-            band = np.zeros((y1 - y0, x1 - x0), np.uint8)
-            for i in members:
-                ix = np.rint(pts[i][0] - x0).astype(np.int64)
-                iy = np.rint(pts[i][1] - y0).astype(np.int64)
-                ok = (ix >= 0) & (iy >= 0) & (ix < x1 - x0) & (iy < y1 - y0)
-                band[iy[ok], ix[ok]] = 1
-            band = cv2.dilate(band, np.ones((k, k), np.uint8))
-            e = find_edge_points(grad, self.config.min_gradient, band)
+            e = edge_points_near(grad, np.concatenate([pts[i][0] for i in members]) - x0,
+                                 np.concatenate([pts[i][1] for i in members]) - y0, band_r,
+                                 self.config.min_gradient)
             for i in members:
                 out[i] = (box, e, e.index_map())
         return out
@@ -588,8 +588,8 @@ class Detector:
         pose = self._full_pose(fit, features)
         vx, vy, vang = p.finish_points(factor, cfg)
         if factor < 0.999:
-            if where is None:  # (a box too small to hold edges)
-                return fit
+            if where is None:  # (a box too small to hold edges, or no finishing points)
+                return Fit(pose, fit.score, fit.matched, fit.rms, fit.inside)
             (x0, y0, x1, y1), edges, index = where
             H, W = gray.shape
             local = Pose(pose.a, pose.b, pose.tx - x0, pose.ty - y0)

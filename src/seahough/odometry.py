@@ -92,11 +92,12 @@ _PRIOR_ANGLE = 4.0          # prior rotation window, +- degrees
 _PRIOR_SCALE = 1.03         # prior scale window, x/÷
 _PRIOR_CANDIDATES = 2       # accumulator peaks examined in the prior window
 _FULL_SHIFT = 0.5           # full search: +- this share of the frame around the last position
+_MAX_SPAN = 3               # ... and the ranges widened for at most this many frames of gap
 _DOUBTFUL = 0.35            # a keyframe measurement less confident than this is checked
                             # against the last measured frame (nearer in time) ...
-_AGREE_BINS = 2.0           # ... which replaces it when they differ by more than this many
-                            # translation bins at the frame's corners and it is more confident
-_MAX_SPAN = 3               # ... and the ranges widened for at most this many frames of gap
+_AGREE_STEPS = 2.0          # ... which replaces it when they differ by more than this many
+                            # translation steps (6 working px each) at the frame's corners
+                            # and it is more confident
 
 _CSV_BASE = ["index", "file", "time", "x", "y", "heading", "scale", "confidence", "flags"]
 _CSV_METRIC = ["x_m", "y_m"]
@@ -120,8 +121,9 @@ class OdometryResult:
         pixels, degrees counter-clockwise as displayed, size change),
         ``score, overlap`` (of the measurement), ``ref`` (index of the frame
         it was measured against), ``method`` (``"prior"``, ``"full"``,
-        ``"previous"``), ``status`` (``"origin"``, ``"measured"``,
-        ``"assumed"``, ``"unreadable"``), ``ms``, ``matrix`` and
+        ``"previous"``: see :func:`run_odometry`'s notes), ``status``
+        (``"origin"``, ``"measured"``, ``"assumed"``, ``"unreadable"``),
+        ``ms``, ``matrix`` and
         ``pair_matrix`` (2x3 as 6 floats, row-major). The run does not keep
         the rows in memory (a survey of 100,000 photos would hold about
         250 MB of them): they are read from ``csv_path`` by
@@ -548,8 +550,10 @@ class _Searcher:
         self.a_known = angle_range[0] == angle_range[1]
         h, w = shape
         self.factor = choose_factor(shape, cfg, math.hypot(w, h), min(scale_range[0], 1.0))
-        step = (cfg.translation_bin or 6.0) / self.factor
-        self.prior_radius = max(_PRIOR_RADIUS * max(w, h), _PRIOR_BINS * step)
+        # the accumulator's usual translation bin, full-resolution px (a known
+        # scale and rotation may give finer ones)
+        self.step = (cfg.translation_bin or 6.0) / self.factor
+        self.prior_radius = max(_PRIOR_RADIUS * max(w, h), _PRIOR_BINS * self.step)
 
     def crop(self, gray):
         x0, y0, x1, y1 = self.box
@@ -949,8 +953,11 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     A keyframe measurement of confidence below 0.35 (an old keyframe, or a
     look-alike of it: a tile or a ripple one period on) is checked by a full
     search against the last measured frame, nearer in time; that one
-    (method ``previous``) replaces it when the two differ by more than two
-    translation bins at the frame's corners and it is more confident.
+    replaces it when the two differ by more than 12 working pixels (two of
+    the accumulator's usual translation bins) at the frame's corners and it
+    is more confident. It is then reported as method ``previous``, with
+    ``ref`` the frame it was measured against (the last measured one, which
+    is the previous frame unless frames in between were assumed).
 
     Each must be confident (>= 0.2), find >= 20 % of the reference's edges,
     keep >= 15 % overlap, and match the edges in view at least 0.4 times as
@@ -1099,7 +1106,7 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
                 st.heading = row["heading"]
             # keep only the frames the next one may be measured against
             for k in list(frames_mem):
-                if k not in (st.key, st.prev):
+                if k not in (st.key, st.prev, st.meas):
                     del frames_mem[k]
             writer.writerow(_row_to_csv(row, columns))
             fcsv.flush()
@@ -1195,8 +1202,7 @@ def _checked(res, i, gray, feats, st: _State, searcher: _Searcher, load, ref_rat
     h, w = st.shape
     grid = np.array([[0.0, 0.0], [w - 1.0, 0.0], [0.0, h - 1.0], [w - 1.0, h - 1.0]])
     gap = float(np.max(np.hypot(*(apply_matrix(implied, grid) - apply_matrix(check.matrix, grid)).T)))
-    step = (searcher.cfg.translation_bin or 6.0) / searcher.factor
-    return check if gap > _AGREE_BINS * step else res
+    return check if gap > _AGREE_STEPS * searcher.step else res
 
 
 def _metric(row, shape, mpp):
@@ -1294,7 +1300,8 @@ def _summary(t: _Totals, items, mpp, scale_range, angle_range, cfg, n_resumed, w
             "min_relative_match": _MIN_RELATIVE,
             "min_overlap": _MIN_OVERLAP, "rekey_overlap": _REKEY_OVERLAP,
             "rekey_match": _REKEY_MATCH,
-            "doubtful_keyframe_check": {"below_confidence": _DOUBTFUL, "agree_bins": _AGREE_BINS},
+            "doubtful_keyframe_check": {"below_confidence": _DOUBTFUL,
+                                        "agree_working_px": _AGREE_STEPS * 6.0},
             "prior_window": {"radius_share": _PRIOR_RADIUS, "min_bins": _PRIOR_BINS,
                              "angle_deg": _PRIOR_ANGLE, "scale": _PRIOR_SCALE},
             "config": dataclasses.asdict(cfg),

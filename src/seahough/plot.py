@@ -370,7 +370,7 @@ def _notes_below(fig, items, pattern, top_left, width, nf_size):
         items = [(_wrap_label(fig, t, width - _LIST_PAD - 150), c) for t, c in items]
         _label_list(fig.axes[0], items, at=(x / fw, y / fh))
         x += _list_size(fig, items)[0] + 14
-    elif not items:
+    else:
         size = nf_size
         while size > 12 and 2.3 * size * DPI / 72 > room:
             size -= 2
