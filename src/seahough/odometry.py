@@ -95,9 +95,9 @@ _FULL_SHIFT = 0.5           # full search: +- this share of the frame around the
 _MAX_SPAN = 3               # ... and the ranges widened for at most this many frames of gap
 _DOUBTFUL = 0.35            # a keyframe measurement less confident than this is checked
                             # against the last measured frame (nearer in time) ...
-_AGREE_STEPS = 2.0          # ... which replaces it when they differ by more than this many
-                            # translation steps (6 working px each) at the frame's corners
-                            # and it is more confident
+_AGREE_PX = 2.0             # ... which replaces it when they differ by more than this many
+                            # working px at the frame's corners (beyond the noise of a
+                            # measurement) and it is more confident
 
 _CSV_BASE = ["index", "file", "time", "x", "y", "heading", "scale", "confidence", "flags"]
 _CSV_METRIC = ["x_m", "y_m"]
@@ -953,9 +953,10 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     A keyframe measurement of confidence below 0.35 (an old keyframe, or a
     look-alike of it: a tile or a ripple one period on) is checked by a full
     search against the last measured frame, nearer in time; that one
-    replaces it when the two differ by more than 12 working pixels (two of
-    the accumulator's usual translation bins) at the frame's corners and it
-    is more confident. It is then reported as method ``previous``, with
+    replaces it when the two differ by more than 2 working pixels at the
+    frame's corners (more than a measurement's noise: an aging keyframe of
+    a scene in relief drifts too) and it is more confident. It is then
+    reported as method ``previous``, with
     ``ref`` the frame it was measured against (the last measured one, which
     is the previous frame unless frames in between were assumed).
 
@@ -1189,8 +1190,9 @@ def _ref_cum(st: _State, ref: int) -> np.ndarray:
 def _checked(res, i, gray, feats, st: _State, searcher: _Searcher, load, ref_rate):
     """A doubtful keyframe measurement against the last measured frame: an
     old keyframe's peak can be a look-alike (a tile, a ripple one period on)
-    that the nearer frame does not share. The nearer frame's measurement
-    replaces it when the two disagree and it is more confident."""
+    that the nearer frame does not share, and an old keyframe of a scene in
+    relief is off by more than its confidence says. The nearer frame's
+    measurement replaces it when the two disagree and it is more confident."""
     # a full search: in the small prior window a look-alike has only one
     # runner-up to be measured against (on the tiled pool it confirmed itself)
     n = i - st.meas
@@ -1202,7 +1204,7 @@ def _checked(res, i, gray, feats, st: _State, searcher: _Searcher, load, ref_rat
     h, w = st.shape
     grid = np.array([[0.0, 0.0], [w - 1.0, 0.0], [0.0, h - 1.0], [w - 1.0, h - 1.0]])
     gap = float(np.max(np.hypot(*(apply_matrix(implied, grid) - apply_matrix(check.matrix, grid)).T)))
-    return check if gap > _AGREE_STEPS * searcher.step else res
+    return check if gap > _AGREE_PX / searcher.factor else res
 
 
 def _metric(row, shape, mpp):
@@ -1301,7 +1303,7 @@ def _summary(t: _Totals, items, mpp, scale_range, angle_range, cfg, n_resumed, w
             "min_overlap": _MIN_OVERLAP, "rekey_overlap": _REKEY_OVERLAP,
             "rekey_match": _REKEY_MATCH,
             "doubtful_keyframe_check": {"below_confidence": _DOUBTFUL,
-                                        "agree_working_px": _AGREE_STEPS * 6.0},
+                                        "agree_working_px": _AGREE_PX},
             "prior_window": {"radius_share": _PRIOR_RADIUS, "min_bins": _PRIOR_BINS,
                              "angle_deg": _PRIOR_ANGLE, "scale": _PRIOR_SCALE},
             "config": dataclasses.asdict(cfg),
