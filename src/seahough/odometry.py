@@ -550,10 +550,8 @@ class _Searcher:
         self.a_known = angle_range[0] == angle_range[1]
         h, w = shape
         self.factor = choose_factor(shape, cfg, math.hypot(w, h), min(scale_range[0], 1.0))
-        # the accumulator's usual translation bin, full-resolution px (a known
-        # scale and rotation may give finer ones)
-        self.step = (cfg.translation_bin or 6.0) / self.factor
-        self.prior_radius = max(_PRIOR_RADIUS * max(w, h), _PRIOR_BINS * self.step)
+        step = (cfg.translation_bin or 6.0) / self.factor
+        self.prior_radius = max(_PRIOR_RADIUS * max(w, h), _PRIOR_BINS * step)
 
     def crop(self, gray):
         x0, y0, x1, y1 = self.box
@@ -956,9 +954,9 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     replaces it when the two differ by more than 2 working pixels at the
     frame's corners (more than a measurement's noise: an aging keyframe of
     a scene in relief drifts too) and it is more confident. It is then
-    reported as method ``previous``, with
-    ``ref`` the frame it was measured against (the last measured one, which
-    is the previous frame unless frames in between were assumed).
+    reported as method ``previous``, with ``ref`` the frame it was measured
+    against (the last measured one, which is the previous frame unless
+    frames in between were assumed).
 
     Each must be confident (>= 0.2), find >= 20 % of the reference's edges,
     keep >= 15 % overlap, and match the edges in view at least 0.4 times as
