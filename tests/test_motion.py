@@ -149,3 +149,76 @@ def test_frames_faint_at_full_resolution_are_still_measured(tmp_path, step, full
     rows = run_odometry(frames, tmp_path, mosaic=False, progress=False).rows
     assert [r["status"] for r in rows] == ["origin", "measured", "measured", "measured"]
     assert abs(rows[-1]["x"] - rows[0]["x"] + 18.0) < 2.0    # the scene moved +6 px a frame
+
+
+def _frame_search(prev, cur):
+    """estimate_motion's search (motion_from_pattern), with its SearchResult."""
+    from seahough.detector import Detector
+    from seahough.motion import MOTION_CONFIG
+    from seahough.pattern import Pattern
+
+    a, b = seahough.to_gray(prev), seahough.to_gray(cur)
+    p = Pattern.from_frame(a, config=MOTION_CONFIG)
+    h, w = a.shape
+    ox, oy = p.origin
+    det = Detector(p, (0.8, 1.25), (-30.0, 30.0), config=MOTION_CONFIG, max_results=1,
+                   min_score=0.15, min_confidence=0.0,
+                   search_region=(ox - 0.5 * w, oy - 0.5 * h, ox + 0.5 * w, oy + 0.5 * h))
+    return p, det.search(b)
+
+
+def test_a_frames_confidence_counts_every_other_candidate_pose():
+    # a frame has no symmetry: every candidate pose that is not (nearly) the
+    # answer's is a rival. The symmetry test for shapes (a rectangle turned by
+    # 180 degrees) found the frame's dense points "the same" under any nearby
+    # pose, up to 30 px and 17 % of scale away, so Sparus 19 -> 21 had no
+    # runner-up at all and reported its score (0.59) as its confidence
+    from seahough.detector import confidence
+    from seahough.motion import MOTION_CONFIG
+
+    seq = "sparus_auv_seabed"
+    p, res = _frame_search(data_path("sequences", seq, "frame_019.png"),
+                           data_path("sequences", seq, "frame_021.png"))
+    assert res.detections
+    d = res.detections[0]
+    pf = p.features(res.factor, MOTION_CONFIG)
+    win = max(res.candidates, key=lambda c: c.work_score)
+
+    def gap(c):  # how far the candidate moves the frame's points from the answer's (working px)
+        return float(np.max(np.hypot(*(np.subtract(c.fit.pose.map(pf.vx, pf.vy),
+                                                   win.fit.pose.map(pf.vx, pf.vy))))))
+
+    rivals = [c.work_score for c in res.candidates if c is not win and gap(c) > 3.0]
+    assert len(rivals) >= 3
+    assert d.confidence == pytest.approx(confidence(win.work_score, max(rivals)), abs=1e-9)
+    assert d.confidence < 0.55
+
+
+@pytest.mark.parametrize("seq, i, j, share", [("sparus_auv_seabed", 0, 1, 0.7),
+                                              ("sparus_auv_seabed", 19, 21, 0.7),
+                                              ("subvo_pool_chain", 8, 9, 0.95),  # look-alikes
+                                              ("aqualoc_amphorae_wreck", 4, 6, 0.7)])
+def test_screening_a_frames_rivals_keeps_the_answer_and_its_confidence(monkeypatch, seq, i, j,
+                                                                       share):
+    # a frame's rival candidates that fit far worse than the best after their
+    # first short ICP are not refined further (Detector._screen): the same
+    # motion, the confidence within 0.04, with fewer refinements
+    import seahough.detector as D
+
+    calls = []
+    refine = D.refine
+    # (the ICPs: scoring a pose, radii=(), costs little)
+    monkeypatch.setattr(D, "refine", lambda *a, **k: (k.get("radii") != () and calls.append(1))
+                        or refine(*a, **k))
+    files = sorted(p for p in data_path("sequences", seq).iterdir()
+                   if p.suffix.lower() in (".png", ".jpg"))
+    a, b = files[i], files[j]
+    screened = seahough.estimate_motion(a, b)
+    n_screened = len(calls)
+    calls.clear()
+    monkeypatch.setattr(D.Detector, "_screen", 0.0)
+    full = seahough.estimate_motion(a, b)
+    assert screened is not None and full is not None
+    np.testing.assert_allclose(screened.matrix, full.matrix, atol=1e-9)
+    assert abs(screened.confidence - full.confidence) < 0.04
+    assert n_screened < share * len(calls)
