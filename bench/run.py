@@ -41,7 +41,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from _common import command, machine  # noqa: E402  (single-thread setup first)
+from _common import command, machine, steady_allocator  # noqa: E402  (single-thread setup first)
 
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
@@ -908,7 +908,9 @@ def report_real(res):
            "truth: low inconsistency is necessary, not sufficient. Times: pair by pair, the "
            f"methods in turn, each pair timed {REAL_REPEAT} times and the fastest kept (timed one "
            "method after the other, the seahough/SIFT ratio on the Sparus frames moved from 1.2 "
-           "to 1.4 between two runs of the same code).\n",
+           "to 1.4 between two runs of the same code), with the allocator's thresholds fixed "
+           "(bench/_common.py, steady_allocator: with glibc's defaults SIFT+RANSAC took about "
+           "50 ms a Sparus pair in a fresh process and 22-24 ms after the larger sequences).\n",
            table(["sequence", "frame", "method", "pairs", "pairs with no answer",
                   "1->3 with no answer", "loops closed", "median loop inconsistency px",
                   "median ms/pair", "target"], rows)]
@@ -1182,6 +1184,7 @@ def main(argv=None) -> dict:
     if args.n is not None and args.n < 1:
         ap.error("--n must be >= 1")
     ctx = {"quick": args.quick, "ght_timeout": 1.5 if args.quick else GHT_TIMEOUT}
+    allocator = steady_allocator()
     t_start = time.perf_counter()
     results, timing = {}, {}
     # the marker task fills the peers' answers the negative task reuses
@@ -1199,7 +1202,8 @@ def main(argv=None) -> dict:
              f"Date: {datetime.date.today().isoformat()}  ",
              f"Machine: {machine()}  ",
              f"Run single-threaded (cv2.setNumThreads(1), NUMBA_NUM_THREADS=1) on a shared 2-core "
-             f"machine (other jobs may share it: timings can be noisy). Whole run: {total:.0f} s "
+             f"machine (other jobs may share it: timings can be noisy); {allocator}. "
+             f"Whole run: {total:.0f} s "
              f"(" + ", ".join(f"{t} {timing[t]:.0f} s" for t in timing) + "). Numba compile time "
              "excluded (a warm-up call first). Peer settings: bench/peers.py and the section at "
              "the end.", "",
