@@ -1141,9 +1141,13 @@ def findings(results) -> str:
                     "translation-only model, not accuracy. ")
         if sp and sps:
             if sp["ms"] < sps["ms"]:
+                narrowly = ", narrowly" if sp["ms"] > 0.9 * sps["ms"] else ""
                 txt += (f"On the small 384x288 Sparus frames seahough ({ms_fmt(sp['ms'])} ms) is "
-                        f"faster than SIFT+RANSAC ({ms_fmt(sps['ms'])} ms), narrowly: SIFT finds "
-                        "few key points there. ")
+                        f"faster than SIFT+RANSAC ({ms_fmt(sps['ms'])} ms){narrowly}: SIFT finds "
+                        "few key points there (about 55 a frame), while seahough refines "
+                        "candidate poses to tell the true peak from its runner-up (a frame's "
+                        "rivals that fit poorly after a first short ICP are not refined further: "
+                        "docs/method.md). ")
             else:
                 txt += (f"On the small 384x288 Sparus frames seahough ({ms_fmt(sp['ms'])} ms) is "
                         f"slower than SIFT+RANSAC ({ms_fmt(sps['ms'])} ms): SIFT finds few key "
