@@ -1144,10 +1144,10 @@ def findings(results) -> str:
                 narrowly = ", narrowly" if sp["ms"] > 0.9 * sps["ms"] else ""
                 txt += (f"On the small 384x288 Sparus frames seahough ({ms_fmt(sp['ms'])} ms) is "
                         f"faster than SIFT+RANSAC ({ms_fmt(sps['ms'])} ms){narrowly}: SIFT finds "
-                        "few key points there (about 55 a frame), while seahough refines "
-                        "candidate poses to tell the true peak from its runner-up (a frame's "
-                        "rivals that fit poorly after a first short ICP are not refined further: "
-                        "docs/method.md). ")
+                        "few key points there (a median of 28 a frame with cv2.SIFT_create()'s "
+                        "defaults), while seahough refines candidate poses to tell the true peak "
+                        "from its runner-up (a frame's rivals that fit poorly after a first short "
+                        "ICP are not refined further: docs/method.md). ")
             else:
                 txt += (f"On the small 384x288 Sparus frames seahough ({ms_fmt(sp['ms'])} ms) is "
                         f"slower than SIFT+RANSAC ({ms_fmt(sps['ms'])} ms): SIFT finds few key "
@@ -1156,7 +1156,7 @@ def findings(results) -> str:
                         "refined to tell the true peak from its runner-up, then a "
                         "full-resolution refinement). ")
             txt += ("In a dead-reckoning run (run_odometry) the previous frame's features are "
-                    "reused and the last motion narrows the search: about 7 ms a pair on these "
+                    "reused and the last motion narrows the search: about 5 ms a pair on these "
                     "frames (docs/odometry.md).")
         out.append(txt)
     return "\n".join(out)

@@ -323,9 +323,13 @@ class Detector:
     _look_radius = 3.0
     _top_votes = 3
     _neighbour_seeds = 6
-    #: A whole frame's candidate whose first short ICP scores below this share
-    #: of the best candidate so far is not refined further (measured on the
-    #: real sequences: the others all refine to 0.1-0.2 against 0.8-0.9).
+    #: A whole frame's candidate whose first short ICP (from its best-looking
+    #: scale) scores below this share of the best candidate so far is scored
+    #: there and not refined further. Only the scale seeds are screened: a
+    #: tile-shifted look-alike on the pool (refined: 0.51 against 0.78) was
+    #: found only from its second scale, so candidates that start from two
+    #: scales try both (screening those too raised that pair's confidence by
+    #: 0.16). See docs/method.md.
     _screen = 0.5
 
     def _candidates(self, pf, features: Features, bins: Bins, best_val, best_k, best_d, factor):
@@ -400,9 +404,9 @@ class Detector:
         looks = [looks[i] for i in top] + sorted(
             (t for i, t in enumerate(looks) if i not in top), key=lambda t: -t[0])
         out = []
-        # a whole frame's other candidates are chance matches of its texture,
-        # there only to measure the runner-up: one that fits far worse than the
-        # best so far after its first short ICP is scored there (see _screen)
+        # a whole frame's other candidates are mostly chance matches of its
+        # texture, there to measure the runner-up: one that fits far worse than
+        # the best so far after its first short ICP is scored there (_screen)
         screen = p.kind == "frame" and not known
         for rank, (_, v, tx, ty, ks, angle, _) in enumerate(looks):
             if len(out) >= cfg.n_candidates:
@@ -449,7 +453,7 @@ class Detector:
                                score_radius=score_r, iterations=self._icp_iterations)
                     if fit is None or f.score > fit.score:
                         fit = f
-                    if fit.score >= self._good_fit or (screen and fit.score < lead):
+                    if fit.score >= self._good_fit:
                         break
                 if not self._pose_ok(fit.pose):
                     continue
