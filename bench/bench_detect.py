@@ -27,7 +27,7 @@ from _common import command, machine  # noqa: E402
 import numpy as np  # noqa: E402
 
 import seahough  # noqa: E402
-from seahough import simulate as S  # noqa: E402
+from seahough import sim as S  # noqa: E402
 from seahough.geometry import apply_matrix  # noqa: E402
 
 SHAPE = (480, 640)
@@ -45,7 +45,7 @@ def corner_error(found, truth, shape, symmetric=False):
 
 def compile_seconds() -> float:
     """First detection in a fresh process with an empty Numba cache, minus a warm one."""
-    code = ("import time, numpy as np, seahough; from seahough import simulate as S\n"
+    code = ("import time, numpy as np, seahough; from seahough import sim as S\n"
             "img, m = S.marker('board', 120); sc, _, _ = S.marker_scene('board', seed=1, source='procedural')\n"
             "p = seahough.Pattern.from_image(img, mask=m); d = seahough.Detector(p)\n"
             "t = time.perf_counter(); d.detect(sc); a = time.perf_counter() - t\n"

@@ -35,8 +35,8 @@ from _common import command, machine  # noqa: E402
 import cv2  # noqa: E402
 
 import seahough  # noqa: E402
-import seahough.odometry as odometry  # noqa: E402
-from seahough import simulate as S  # noqa: E402
+import seahough.motion.odometry as odometry  # noqa: E402
+from seahough import sim as S  # noqa: E402
 
 SHAPE = (480, 640)
 MiB = 1024.0 * 1024.0

@@ -1,4 +1,4 @@
-"""Speed of photo dead reckoning (seahough.odometry), single thread.
+"""Speed of photo dead reckoning (seahough.motion.odometry), single thread.
 
 Milliseconds per frame pair measured with the prior (the last motion narrows
 the search to a small window: the usual case), and per frame over a whole
@@ -36,11 +36,11 @@ from _common import command, machine  # noqa: E402  (sets single-thread first)
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
-from seahough import simulate as S  # noqa: E402
+from seahough import sim as S  # noqa: E402
 from seahough._data import shared_data_dir  # noqa: E402
 from seahough.geometry import apply_matrix, invert_matrix  # noqa: E402
-import seahough.odometry as odometry  # noqa: E402
-from seahough.odometry import list_frames, run_odometry  # noqa: E402
+import seahough.motion.odometry as odometry  # noqa: E402
+from seahough.motion.odometry import list_frames, run_odometry  # noqa: E402
 
 TARGET_MS = 30.0
 

@@ -48,7 +48,7 @@ import numpy as np  # noqa: E402
 
 import peers  # noqa: E402
 import seahough  # noqa: E402
-from seahough import simulate as S  # noqa: E402
+from seahough import sim as S  # noqa: E402
 from seahough._data import shared_data_dir  # noqa: E402
 from seahough.geometry import apply_matrix, compose, matrix_to_pose  # noqa: E402
 

@@ -19,12 +19,12 @@ import numpy as np
 import pytest
 
 import seahough
-from seahough import simulate as sim
+from seahough import sim as sim
 from seahough._data import shared_data_dir
 
 from conftest import seahough_command
 
-HAS_ODOMETRY = importlib.util.find_spec("seahough.odometry") is not None
+HAS_ODOMETRY = importlib.util.find_spec("seahough.motion.odometry") is not None
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
@@ -217,7 +217,7 @@ def test_bad_image_among_good_ones(scenes):
 
 def test_detect_out_writes_pngs(scenes, tmp_path):
     d, _ = scenes
-    from seahough.plot import detections_size
+    from seahough.viz.plot import detections_size
 
     proc = run("detect", d / "pattern.png", d / "scene.png", d / "neg.png", "--out", tmp_path,
                "--json", "--quiet")
@@ -387,7 +387,7 @@ def test_simulate_writes_scenes_and_truth(tmp_path, kind):
 
 
 def test_odometry_command_calls_run_odometry(tmp_path, monkeypatch, capsys):
-    """The command's wiring to seahough.odometry.run_odometry (a stand-in here)."""
+    """The command's wiring to seahough.motion.odometry.run_odometry (a stand-in here)."""
     from seahough import cli
 
     calls = {}
@@ -400,9 +400,9 @@ def test_odometry_command_calls_run_odometry(tmp_path, monkeypatch, capsys):
         return types.SimpleNamespace(rows=rows, summary={}, csv_path=Path(out_dir) / "track.csv",
                                      json_path=None, mosaic_path=None, trajectory_path=None)
 
-    fake = types.ModuleType("seahough.odometry")
+    fake = types.ModuleType("seahough.motion.odometry")
     fake.run_odometry = fake_run_odometry
-    monkeypatch.setitem(sys.modules, "seahough.odometry", fake)
+    monkeypatch.setitem(sys.modules, "seahough.motion.odometry", fake)
     (tmp_path / "frames").mkdir()
     with pytest.raises(SystemExit) as ex:
         cli.main(["odometry", str(tmp_path / "frames"), "--out", str(tmp_path / "o"),
@@ -424,7 +424,7 @@ def test_odometry_command_calls_run_odometry(tmp_path, monkeypatch, capsys):
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
 
 
-@pytest.mark.skipif(not HAS_ODOMETRY, reason="seahough.odometry is not there yet")
+@pytest.mark.skipif(not HAS_ODOMETRY, reason="seahough.motion.odometry is not there yet")
 def test_odometry_on_simulated_sequence(tmp_path):
     proc = run("simulate", "sequence", "--out", tmp_path / "seq", "--n", 5, "--procedural",
                "--seed", 2)
@@ -470,7 +470,7 @@ def sequence_dir(tmp_path_factory):
     return d
 
 
-@pytest.mark.skipif(not HAS_ODOMETRY, reason="seahough.odometry is not there yet")
+@pytest.mark.skipif(not HAS_ODOMETRY, reason="seahough.motion.odometry is not there yet")
 def test_odometry_progress_bar_like_detect(sequence_dir, tmp_path):
     """On a terminal the bar is drawn, --quiet removes it; into a pipe or a
     log file it is not drawn (as detect's)."""
@@ -485,7 +485,7 @@ def test_odometry_progress_bar_like_detect(sequence_dir, tmp_path):
     assert json.loads(proc.stdout)["frames"] == 8
 
 
-@pytest.mark.skipif(not HAS_ODOMETRY, reason="seahough.odometry is not there yet")
+@pytest.mark.skipif(not HAS_ODOMETRY, reason="seahough.motion.odometry is not there yet")
 def test_odometry_resume_after_a_killed_run(sequence_dir, tmp_path):
     """--resume continues the CSV a killed run left (a header, a few rows
     and a row cut short) to the result of an uninterrupted run."""
@@ -509,7 +509,7 @@ def test_odometry_resume_after_a_killed_run(sequence_dir, tmp_path):
 
 
 def test_demo_end_to_end(tmp_path):
-    from seahough.plot import detections_size
+    from seahough.viz.plot import detections_size
 
     proc = run("demo", "--out", tmp_path / "demo", "--quiet", timeout=120)
     assert proc.returncode == 0, proc.stdout + proc.stderr

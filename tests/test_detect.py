@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import seahough
-from seahough import simulate as S
+from seahough import sim as S
 from seahough.geometry import apply_matrix, pose_to_matrix
 
 from conftest import corner_error, data_path
@@ -230,7 +230,7 @@ def test_pose_refined_outside_the_searched_ranges_is_flagged():
     box = cv2.boxPoints(((160.0, 120.0), (100.0, 60.0), -30.0))
     cv2.fillPoly(img, [np.round(box).astype(np.int32)], 220)
     pattern = seahough.Pattern.rectangle(100, 60)
-    flag = seahough.detector.FLAG_OUTSIDE_RANGE
+    flag = seahough.core.detector.FLAG_OUTSIDE_RANGE
     inside = seahough.Detector(pattern, scale_range=(0.5, 2.0)).detect(img)
     assert inside and flag not in inside[0].flags
     small = seahough.Detector(pattern, scale_range=(1.1, 1.5)).detect(img)

@@ -7,7 +7,7 @@ import pytest
 import seahough
 from seahough import (ImageReadError, ImageSizeError, ImageValueError, ParameterError,
                       PatternError, SeahoughError)
-from seahough.imageio import to_gray
+from seahough.io.images import to_gray
 
 
 def _scene():

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import seahough
-from seahough import simulate as S
+from seahough import sim as S
 from seahough.geometry import apply_matrix, compose
 
 from conftest import data_path
@@ -131,7 +131,7 @@ def test_frames_faint_at_full_resolution_are_still_measured(tmp_path, step, full
     # (step 8) the search once raised ValueError (an empty point set); with
     # too few snapped (step 14) the full features at scale 1 take over
     from seahough.errors import PatternError
-    from seahough.odometry import ODOMETRY_CONFIG, run_odometry
+    from seahough.motion.odometry import ODOMETRY_CONFIG, run_odometry
     a, b = _faint_frame(0, step, 3.0), _faint_frame(6, step, 3.0)
     p = seahough.Pattern.from_frame(a, config=ODOMETRY_CONFIG)
     working = p.features(0.5, ODOMETRY_CONFIG).vx.size
@@ -153,7 +153,7 @@ def test_frames_faint_at_full_resolution_are_still_measured(tmp_path, step, full
 
 def _motion_search(monkeypatch, prev, cur):
     """estimate_motion(prev, cur), with the Detector and SearchResult of its search."""
-    import seahough.detector as D
+    import seahough.core.detector as D
 
     got = []
     search = D.Detector.search
@@ -170,8 +170,8 @@ def test_a_frames_confidence_counts_every_other_candidate_pose(monkeypatch):
     # 180 degrees) found the frame's dense points "the same" under nearby
     # poses, up to 30 px and 17 % of scale away: on Sparus 19 -> 21 five of
     # six rivals were dropped, and the confidence came out 0.534 for 0.514
-    from seahough.detector import confidence
-    from seahough.motion import MOTION_CONFIG
+    from seahough.core.detector import confidence
+    from seahough.motion.pair import MOTION_CONFIG
 
     seq = "sparus_auv_seabed"
     m, det, res = _motion_search(monkeypatch, data_path("sequences", seq, "frame_019.png"),
@@ -204,7 +204,7 @@ def test_screening_a_frames_rivals_keeps_the_answer_and_its_confidence(monkeypat
     # 640x360, 5 -> 7, a tile-shifted look-alike fits (0.51 against 0.78) only
     # from its second scale: screening that second start too gave 0.70 for 0.54
     import cv2
-    import seahough.detector as D
+    import seahough.core.detector as D
 
     calls = []
     refine = D.refine

@@ -1,4 +1,4 @@
-"""Photo dead reckoning over whole sequences (seahough.odometry)."""
+"""Photo dead reckoning over whole sequences (seahough.motion.odometry)."""
 
 from __future__ import annotations
 
@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 
 import seahough
-from seahough import simulate as S
+from seahough import sim as S
 from seahough.geometry import apply_matrix, compose, invert_matrix, matrix_to_pose
-from seahough.odometry import list_frames, read_odometry_csv, run_odometry, time_from_name
+from seahough.motion.odometry import list_frames, read_odometry_csv, run_odometry, time_from_name
 
 from conftest import DATA, data_path
 
@@ -496,7 +496,7 @@ def test_a_long_run_keeps_no_state_per_frame(tmp_path, monkeypatch):
     # (garbage-collected) Python objects as the run goes, with a loop of frames
     # on disk listed over and over (the camera circles the same ground)
     import gc
-    import seahough.odometry as O
+    import seahough.motion.odometry as O
     frames, _ = _sequence("loop", n=24, seed=12)
     paths = _write_frames(frames, tmp_path / "loop")
     seq = [paths[i % len(paths)] for i in range(150)]
@@ -541,7 +541,7 @@ def test_resume_gives_the_same_result(tmp_path):
 
 _KILL_SCRIPT = """
 import sys, time
-import seahough.odometry as O
+import seahough.motion.odometry as O
 raw = O._Reader.raw
 def slow(self, i):
     time.sleep(0.15)

@@ -1,4 +1,4 @@
-"""seahough.plot: every picture is a PNG of a fixed size that shows something."""
+"""seahough.viz.plot: every picture is a PNG of a fixed size that shows something."""
 
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import seahough
-from seahough import plot
-from seahough import simulate as sim
+from seahough.viz import plot
+from seahough import sim as sim
 
 
 @pytest.fixture(scope="module")
@@ -141,7 +141,7 @@ def test_save_mosaic(tmp_path):
 # ------------------------------------------------------------ labels and markers
 def _planes(n_angles=64, scales=(0.8, 0.9, 1.0, 1.1, 1.25), a0=0.0, span=360.0):
     """Synthetic accumulator planes: a flat 2-D grid, no votes yet."""
-    from seahough.accumulator import AccumulatorPlanes
+    from seahough.core.accumulator import AccumulatorPlanes
 
     w = span / n_angles
     angles = (a0 + (np.arange(n_angles) + 0.5) * w) % 360.0

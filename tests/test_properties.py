@@ -26,8 +26,8 @@ from hypothesis import strategies as st
 
 from seahough import (Config, Detection, Detector, ImageError, ImageSizeError, ImageValueError,
                       Motion, ParameterError, Pattern, PatternError, estimate_motion, to_gray)
-from seahough.detector import SEARCH_NOTES
-from seahough.imageio import MIN_SIDE
+from seahough.core.detector import SEARCH_NOTES
+from seahough.io.images import MIN_SIDE
 
 N = int(os.environ.get("SEAHOUGH_HYPOTHESIS_EXAMPLES", "0"))
 

@@ -35,7 +35,7 @@ import pytest
 from seahough import (Config, Detector, ImageReadError, ImageSizeError,
                       ImageValueError, ParameterError, Pattern, PatternError, SeahoughError,
                       estimate_motion, read_image, to_gray)
-from seahough import simulate as sim
+from seahough import sim as sim
 
 from conftest import seahough_command
 
@@ -445,7 +445,7 @@ def _assert_clean(line: str):
 def test_decoder_log_text_becomes_one_clean_phrase(corpus, monkeypatch, tmp_path):
     """What the decoders print while failing (libpng's warnings, or OpenCV's
     log lines with level, time, source file and line) is kept to a phrase."""
-    from seahough.imageio import _first_line
+    from seahough.io.images import _first_line
 
     assert _first_line(_OPENCV_LOG) == "PNG: image width is zero in IHDR"
     assert _first_line(_OPENCV_LOG.split("\n", 1)[1]) == "can't read header"
@@ -502,7 +502,7 @@ def test_pixel_limit_is_documented_and_shared():
 
 @pytest.mark.parametrize("fname", ["bomb.png", "bomb.jpg"])
 def test_header_bomb_is_refused_before_decoding(corpus, fname, monkeypatch):
-    import seahough.imageio as io
+    import seahough.io.images as io
 
     def no_decode(*a, **k):
         raise AssertionError("the bomb was handed to the decoder")
@@ -964,7 +964,7 @@ def _broken_sequence(folder: Path):
 
 
 def test_odometry_flags_every_kind_of_broken_frame_and_goes_on(tmp_path):
-    from seahough.odometry import run_odometry
+    from seahough.motion.odometry import run_odometry
 
     frames, unreadable = _broken_sequence(tmp_path / "frames")
     res = run_odometry(tmp_path / "frames", tmp_path / "out", progress=False, mosaic=False)

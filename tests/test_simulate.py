@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
-from seahough import simulate as S
+from seahough import sim as S
 from seahough.geometry import apply_matrix, compose, invert_matrix, matrix_to_pose, pose_to_matrix
 
 SHAPE = (480, 640)
@@ -39,7 +39,8 @@ def _warp_error(src: np.ndarray, dst: np.ndarray, matrix: np.ndarray) -> float:
 @pytest.fixture
 def no_shared_data(monkeypatch):
     """Pretend ../shared/data is absent (a user's fresh checkout)."""
-    monkeypatch.setattr(S, "shared_data_dir", lambda: None)
+    import seahough.sim.simulate as simulate_module
+    monkeypatch.setattr(simulate_module, "shared_data_dir", lambda: None)
 
 
 # ----------------------------------------------------------------------------

@@ -12,14 +12,14 @@ the peak is the vehicle's motion (photo dead reckoning).
 """
 
 from .config import Config
-from .detector import Detection, Detector, SearchResult
+from .core.detector import Detection, Detector, SearchResult
 from .errors import (ImageError, ImageReadError, ImageSizeError, ImageValueError,
                      ParameterError, PatternError, SeahoughError)
 from .geometry import matrix_to_pose, pose_to_matrix, solve_segment_pair
-from .imageio import read_image, to_gray
-from .motion import Motion, estimate_motion
-from .odometry import OdometryResult, list_frames, run_odometry
-from .pattern import Pattern
+from .io.images import read_image, to_gray
+from .motion.pair import Motion, estimate_motion
+from .motion.odometry import OdometryResult, list_frames, run_odometry
+from .core.pattern import Pattern
 
 __version__ = "0.1.0"
 

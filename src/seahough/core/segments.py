@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import _kernels as K
+from . import kernels as K
 from .keypoints import EdgePoints
 
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from .errors import ImageReadError, ImageSizeError, ImageValueError
+from ..errors import ImageReadError, ImageSizeError, ImageValueError
 
 #: The smallest side, in pixels, an image must have to hold any edge.
 MIN_SIDE = 8

@@ -26,7 +26,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 
-from .geometry import format_angle
+from ..geometry import format_angle
 
 __all__ = ["plot_detections", "plot_accumulator", "plot_edges", "plot_trajectory",
            "save_mosaic", "DPI"]
@@ -78,7 +78,7 @@ def _finish(fig: Figure, path) -> Figure:
 
 def _as_display(image) -> tuple[np.ndarray, bool]:
     """``(array for imshow, is_colour)`` from a path or an OpenCV array."""
-    from .imageio import read_image, to_gray
+    from ..io.images import read_image, to_gray
 
     if isinstance(image, (str, os.PathLike)):
         image = read_image(image)
@@ -711,10 +711,10 @@ def plot_edges(image, features=None, path=None, *, config=None, title=None) -> F
     matplotlib.figure.Figure
         1300 x 560 px.
     """
-    from .config import Config
-    from .features import extract_features
-    from .imageio import to_gray
-    from .preprocess import choose_factor
+    from ..config import Config
+    from ..core.features import extract_features
+    from ..io.images import to_gray
+    from ..core.preprocess import choose_factor
 
     if features is None:
         cfg = config or Config()

@@ -18,11 +18,11 @@ from pathlib import Path
 import click
 import numpy as np
 
-from . import __version__
-from .config import Config
-from .detector import Detector
-from .errors import SeahoughError
-from .geometry import format_angle
+from .. import __version__
+from ..config import Config
+from ..core.detector import Detector
+from ..errors import SeahoughError
+from ..geometry import format_angle
 
 PROG = "seahough"
 SHAPES_HELP = ("rect:W,H | line:LENGTH,WIDTH | circle:R | circle:R,INNER (a ring) | "
@@ -110,7 +110,7 @@ def parse_pattern(spec: str, polarity: str | None = None, mask: str | None = Non
     >>> parse_pattern("rect:60,40").kind
     'rectangle'
     """
-    from .pattern import Pattern
+    from ..core.pattern import Pattern
 
     kind, sep, rest = spec.partition(":")
     kind = kind.strip().lower()
@@ -207,7 +207,7 @@ def _table(rows, header, left=False) -> list[str]:
 
 
 def _detection_lines(dets) -> list[str]:
-    from .detector import FLAG_ALONG_LINE
+    from ..core.detector import FLAG_ALONG_LINE
 
     if dets and dets[0].kind == "line":
         header = ("#", "line_angle", "offset", "x", "y", "width_scale", "score", "conf", "flags")
@@ -306,7 +306,7 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     Example:
       seahough detect marker.png dive/*.jpg --scale-range 0.5 2 --json
     """
-    from .imageio import read_image
+    from ..io.images import read_image
 
     cfg_kw = {}
     if downscale is not None:
@@ -347,7 +347,7 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
         h, w = img.shape[:2]
         written = {}
         if out_dir is not None:
-            from . import plot
+            from .. import viz as plot
 
             stem = Path(name).stem
             k = stems.get(stem, 0)
@@ -440,7 +440,7 @@ def _str_or_none(p):
 
 def _import_odometry():
     try:
-        from .odometry import run_odometry
+        from ..motion.odometry import run_odometry
     except ImportError as e:
         if "odometry" not in str(e):
             raise
@@ -592,8 +592,8 @@ def _simulate_into(kind, out: Path, truth: dict, count: int, bar, *, seed, wat, 
                    marker_name, size, path) -> None:
     """The scenes of :func:`write_simulation`, written one by one (``bar``
     ticks per scene or frame written)."""
-    from . import simulate as sim
-    from .geometry import apply_matrix, compose, invert_matrix
+    from .. import sim
+    from ..geometry import apply_matrix, compose, invert_matrix
 
     tick = (lambda: None) if bar is None else (lambda: bar.update(1))
     w, h = size
@@ -729,10 +729,10 @@ def demo(out, quiet):
     rope (a line pattern), dead-reckons the sequence, writes every picture
     to --out and prints what was found against the truth.
     """
-    from . import plot
-    from . import simulate as sim
-    from .geometry import apply_matrix, invert_matrix
-    from .pattern import Pattern
+    from .. import viz as plot
+    from .. import sim
+    from ..geometry import apply_matrix, invert_matrix
+    from ..core.pattern import Pattern
 
     o = Path(out)
     o.mkdir(parents=True, exist_ok=True)

@@ -47,17 +47,17 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from ._validate import number, pair
-from .accumulator import check_ranges
-from .config import Config
-from .detector import Detector
-from .errors import ImageError, ParameterError, SeahoughError
-from .features import extract_features
-from .geometry import angle_difference, apply_matrix, compose, invert_matrix, matrix_to_pose
-from .imageio import read_image, to_gray
-from .motion import MOTION_CONFIG, content_box
-from .pattern import Pattern
-from .preprocess import choose_factor
+from .._validate import number, pair
+from ..core.accumulator import check_ranges
+from ..config import Config
+from ..core.detector import Detector
+from ..errors import ImageError, ParameterError, SeahoughError
+from ..core.features import extract_features
+from ..geometry import angle_difference, apply_matrix, compose, invert_matrix, matrix_to_pose
+from ..io.images import read_image, to_gray
+from .pair import MOTION_CONFIG, content_box
+from ..core.pattern import Pattern
+from ..core.preprocess import choose_factor
 
 __all__ = ["run_odometry", "list_frames", "read_odometry_csv", "time_from_name", "OdometryResult",
            "ODOMETRY_CONFIG", "IMAGE_EXTENSIONS", "VIDEO_EXTENSIONS"]
@@ -845,7 +845,7 @@ def _plot_trajectory(csv_path, path: Path, metric: bool):
                   "flags": r.get("flags")} for r in _iter_odometry_csv(csv_path)]
     unit = "m" if metric else "px"
     try:
-        from .plot import plot_trajectory
+        from ..viz.plot import plot_trajectory
     except ImportError:
         plot_trajectory = None
     if plot_trajectory is not None:

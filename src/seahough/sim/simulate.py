@@ -45,9 +45,9 @@ from typing import Sequence, Union
 import cv2
 import numpy as np
 
-from ._data import shared_data_dir
-from .errors import ImageReadError, ParameterError
-from .geometry import (apply_matrix, compose, invert_matrix, matrix_to_pose, pose_to_matrix,
+from .._data import shared_data_dir
+from ..errors import ImageReadError, ParameterError
+from ..geometry import (apply_matrix, compose, invert_matrix, matrix_to_pose, pose_to_matrix,
                        rotation)
 
 __all__ = [

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from .config import Config
+from ..config import Config
 
 
 @dataclass

@@ -6,12 +6,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .config import Config
-from .detector import Detector
-from .errors import ParameterError, PatternError
-from ._validate import number
-from .imageio import MIN_SIDE, to_gray
-from .pattern import Pattern
+from ..config import Config
+from ..core.detector import Detector
+from ..errors import ParameterError, PatternError
+from .._validate import number
+from ..io.images import MIN_SIDE, to_gray
+from ..core.pattern import Pattern
 
 
 @dataclass

@@ -9,14 +9,14 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from . import _kernels as K
+from . import kernels as K
 from .accumulator import AccumulatorPlanes, Bins, accumulate, check_ranges, make_bins
-from .config import Config
-from ._validate import number
-from .errors import ParameterError
+from ..config import Config
+from .._validate import number
+from ..errors import ParameterError
 from .features import Features, extract_features
-from .geometry import apply_matrix, pose_to_matrix
-from .imageio import to_gray
+from ..geometry import apply_matrix, pose_to_matrix
+from ..io.images import to_gray
 from .keypoints import edge_points_near
 from .pattern import Pattern
 from .preprocess import choose_factor, compute_gradients

@@ -14,12 +14,12 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from . import _kernels as K
-from .config import Config
-from ._validate import number
-from .errors import ParameterError, PatternError
+from . import kernels as K
+from ..config import Config
+from .._validate import number
+from ..errors import ParameterError, PatternError
 from .features import extract_features
-from .imageio import to_gray
+from ..io.images import to_gray
 from .keypoints import edge_points_near
 from .preprocess import choose_factor, compute_gradients
 

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .config import Config
+from ..config import Config
 from .keypoints import EdgePoints, find_edge_points, local_contrast, select_keypoints
 from .preprocess import Gradients, compute_gradients
 from .segments import Segments, trace_segments

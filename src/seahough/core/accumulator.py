@@ -14,10 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import _kernels as K
-from .config import Config
-from ._validate import pair
-from .errors import ParameterError
+from . import kernels as K
+from ..config import Config
+from .._validate import pair
+from ..errors import ParameterError
 from .pattern import PatternFeatures
 from .segments import Segments
 

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import _kernels as K
-from .geometry import wrap360
+from . import kernels as K
+from ..geometry import wrap360
 from .keypoints import EdgePoints
 
 

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from . import _kernels as K
+from . import kernels as K
 from .preprocess import Gradients
 
 
