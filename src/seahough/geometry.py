@@ -12,7 +12,9 @@ pattern counter-clockwise as the image is displayed.
 
 from __future__ import annotations
 
+import cmath
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -44,18 +46,35 @@ def pose_to_matrix(x: float, y: float, scale: float, angle_deg: float,
     return np.hstack([a, t[:, None]])
 
 
-def wrap360(angle_deg: float) -> float:
-    """An angle in degrees brought into [0, 360).
+def wrap_angle(angle_deg: float, period: float = 360.0, low: float = 0.0) -> float:
+    """An angle in degrees brought into ``[low, low + period)``.
 
-    ``x % 360`` alone gives 360.0 for a tiny negative ``x`` (rounding).
+    ``x % 360`` alone gives 360.0 for a tiny negative ``x`` (rounding); this
+    never leaves the interval. ``low=-180`` gives the signed form used for
+    motions, ``period=180`` the direction of a line.
+
+    Examples
+    --------
+    >>> wrap_angle(-1e-20), wrap_angle(370.0), wrap_angle(190.0, low=-180.0)
+    (0.0, 10.0, -170.0)
+    >>> wrap_angle(200.0, period=180.0)
+    20.0
+    """
+    a = (float(angle_deg) - low) % period
+    if a >= period:
+        a = 0.0
+    return a + low
+
+
+def wrap360(angle_deg: float) -> float:
+    """:func:`wrap_angle` into [0, 360).
 
     Examples
     --------
     >>> wrap360(-1e-20), wrap360(370.0)
     (0.0, 10.0)
     """
-    a = float(angle_deg) % 360.0
-    return 0.0 if a >= 360.0 else a
+    return wrap_angle(angle_deg)
 
 
 def matrix_to_pose(matrix: np.ndarray, origin: tuple[float, float] = (0.0, 0.0)
@@ -63,6 +82,9 @@ def matrix_to_pose(matrix: np.ndarray, origin: tuple[float, float] = (0.0, 0.0)
     """Inverse of :func:`pose_to_matrix` for a similarity matrix.
 
     Returns ``(x, y, scale, angle_deg)`` with the angle in [0, 360).
+
+    >>> [round(v, 6) for v in matrix_to_pose(pose_to_matrix(3, 4, 2.0, 30.0))]
+    [3.0, 4.0, 2.0, 30.0]
     """
     m = np.asarray(matrix, dtype=float)
     a, b = 0.5 * (m[0, 0] + m[1, 1]), 0.5 * (m[0, 1] - m[1, 0])
@@ -73,21 +95,35 @@ def matrix_to_pose(matrix: np.ndarray, origin: tuple[float, float] = (0.0, 0.0)
 
 
 def apply_matrix(matrix: np.ndarray, points) -> np.ndarray:
-    """Map an (N, 2) array of (x, y) points through a 2x3 matrix."""
+    """Map an (N, 2) array of (x, y) points through a 2x3 matrix.
+
+    >>> apply_matrix([[2, 0, 1], [0, 2, 0]], [[1, 1]])
+    array([[3., 2.]])
+    """
     p = np.asarray(points, dtype=float).reshape(-1, 2)
     m = np.asarray(matrix, dtype=float)
     return p @ m[:, :2].T + m[:, 2]
 
 
 def invert_matrix(matrix: np.ndarray) -> np.ndarray:
-    """Inverse of a 2x3 affine matrix (as ``cv2.invertAffineTransform``)."""
+    """Inverse of a 2x3 affine matrix (as ``cv2.invertAffineTransform``).
+
+    >>> invert_matrix([[2, 0, 4], [0, 2, 0]])
+    array([[ 0.5,  0. , -2. ],
+           [ 0. ,  0.5,  0. ]])
+    """
     m = np.asarray(matrix, dtype=float)
     a_inv = np.linalg.inv(m[:, :2])
     return np.hstack([a_inv, (-a_inv @ m[:, 2])[:, None]])
 
 
 def compose(second: np.ndarray, first: np.ndarray) -> np.ndarray:
-    """The 2x3 matrix of applying ``first`` then ``second``."""
+    """The 2x3 matrix of applying ``first`` then ``second``.
+
+    >>> compose([[1, 0, 5], [0, 1, 0]], [[2, 0, 0], [0, 2, 0]])
+    array([[2., 0., 5.],
+           [0., 2., 0.]])
+    """
     a = np.vstack([np.asarray(first, float), [0, 0, 1]])
     b = np.vstack([np.asarray(second, float), [0, 0, 1]])
     return (b @ a)[:2]
@@ -123,7 +159,11 @@ def solve_segment_pair(p1, p2, q1, q2) -> tuple[float, float, float, float]:
 
 
 def angle_difference(a_deg: float, b_deg: float, period: float = 360.0) -> float:
-    """Smallest signed difference ``a - b`` in degrees, modulo ``period``."""
+    """Smallest signed difference ``a - b`` in degrees, modulo ``period``.
+
+    >>> angle_difference(350.0, 10.0), angle_difference(10.0, 170.0, period=180.0)
+    (-20.0, 20.0)
+    """
     d = (a_deg - b_deg + period / 2) % period - period / 2
     return float(d)
 
@@ -146,3 +186,142 @@ def format_angle(degrees: float, decimals: int = 2, period: float = 360.0) -> st
     if r >= period:
         r -= period
     return f"{r + 0.0:.{decimals}f}"      # + 0.0: never "-0.00"
+
+
+def overlap(matrix, width: int, height: int, n: int = 24) -> float:
+    """Share of a ``width`` x ``height`` frame that ``matrix`` maps inside an
+    equally sized frame (sampled on an ``n`` x ``n`` grid).
+
+    >>> overlap([[1, 0, 0], [0, 1, 0]], 64, 48), overlap([[1, 0, 32], [0, 1, 0]], 65, 48)
+    (1.0, 0.5)
+    """
+    xs, ys = np.meshgrid(np.linspace(0, width - 1, n), np.linspace(0, height - 1, n))
+    p = apply_matrix(matrix, np.stack([xs.ravel(), ys.ravel()], 1))
+    return float(np.mean((p[:, 0] >= 0) & (p[:, 1] >= 0) & (p[:, 0] <= width - 1)
+                         & (p[:, 1] <= height - 1)))
+
+
+@dataclass(frozen=True)
+class Similarity:
+    """A similarity transform: equation 1 of the paper, as a value.
+
+    ``x'' = tx + a x' + b y'`` and ``y'' = ty - b x' + a y'``, with
+    ``a = scale cos(angle)``, ``b = scale sin(angle)``: a positive angle
+    turns counter-clockwise as displayed (x right, y down). The same
+    transform is the 2x3 matrix ``[[a, b, tx], [-b, a, ty]]`` (as OpenCV's
+    ``warpAffine`` takes it) and, on ``z = x + i y``, ``z -> (a - i b) z + t``.
+    This is the only place where the arithmetic of such transforms is
+    written; poses, pair motions and trajectories all use it.
+
+    Examples
+    --------
+    >>> s = Similarity.from_pose(10.0, 0.0, 2.0, 90.0)
+    >>> s.apply([[1.0, 0.0]]).round(6)
+    array([[10., -2.]])
+    >>> s.compose(s.inverse()).matrix.round(9) + 0.0
+    array([[1., 0., 0.],
+           [0., 1., 0.]])
+    >>> half = s.power(0.5)
+    >>> round(half.scale, 6), round(half.angle, 6)
+    (1.414214, 45.0)
+    >>> bool(np.allclose(half.compose(half).matrix, s.matrix))
+    True
+    """
+
+    a: float
+    b: float
+    tx: float
+    ty: float
+
+    # ------------------------------------------------------------ construction
+    @classmethod
+    def identity(cls) -> "Similarity":
+        return cls(1.0, 0.0, 0.0, 0.0)
+
+    @classmethod
+    def from_params(cls, tx: float, ty: float, scale: float, angle_rad: float) -> "Similarity":
+        """From the translation, the scale and the angle in radians."""
+        return cls(scale * math.cos(angle_rad), scale * math.sin(angle_rad), tx, ty)
+
+    @classmethod
+    def from_pose(cls, x: float, y: float, scale: float, angle_deg: float,
+                  origin=(0.0, 0.0)) -> "Similarity":
+        """The transform that puts ``origin`` at ``(x, y)`` (see :func:`pose_to_matrix`)."""
+        return cls.from_matrix(pose_to_matrix(x, y, scale, angle_deg, origin))
+
+    @classmethod
+    def from_matrix(cls, matrix) -> "Similarity":
+        """The nearest similarity to a 2x3 matrix (averages out rounding asymmetry)."""
+        m = np.asarray(matrix, dtype=float)
+        return cls(float(0.5 * (m[0, 0] + m[1, 1])), float(0.5 * (m[0, 1] - m[1, 0])),
+                   float(m[0, 2]), float(m[1, 2]))
+
+    # ------------------------------------------------------------------ reading
+    @property
+    def scale(self) -> float:
+        return math.hypot(self.a, self.b)
+
+    @property
+    def angle(self) -> float:
+        """Degrees in [0, 360), counter-clockwise as displayed."""
+        return wrap360(math.degrees(math.atan2(self.b, self.a)))
+
+    @property
+    def matrix(self) -> np.ndarray:
+        """The 2x3 matrix ``[[a, b, tx], [-b, a, ty]]``."""
+        return np.array([[self.a, self.b, self.tx], [-self.b, self.a, self.ty]])
+
+    def to_pose(self, origin=(0.0, 0.0)) -> tuple[float, float, float, float]:
+        """``(x, y, scale, angle_deg)``: where ``origin`` lands, and the rest."""
+        x, y = self.map(float(origin[0]), float(origin[1]))
+        return float(x), float(y), self.scale, self.angle
+
+    # ---------------------------------------------------------------- applying
+    def map(self, x, y):
+        """Map coordinates (scalars or arrays) ``x, y`` -> ``(x'', y'')``."""
+        x = np.asarray(x, float)
+        y = np.asarray(y, float)
+        return self.tx + self.a * x + self.b * y, self.ty - self.b * x + self.a * y
+
+    def apply(self, points) -> np.ndarray:
+        """Map an (N, 2) array of (x, y) points."""
+        p = np.asarray(points, dtype=float).reshape(-1, 2)
+        x, y = self.map(p[:, 0], p[:, 1])
+        return np.stack([x, y], 1)
+
+    def overlap(self, width: int, height: int, n: int = 24) -> float:
+        """See :func:`overlap`."""
+        return overlap(self.matrix, width, height, n)
+
+    # ------------------------------------------------------------------ algebra
+    def _complex(self) -> tuple[complex, complex]:
+        return complex(self.a, -self.b), complex(self.tx, self.ty)
+
+    @classmethod
+    def _from_complex(cls, c: complex, t: complex) -> "Similarity":
+        return cls(c.real, -c.imag, t.real, t.imag)
+
+    def compose(self, first: "Similarity") -> "Similarity":
+        """Apply ``first``, then this one."""
+        c2, t2 = self._complex()
+        c1, t1 = first._complex()
+        return self._from_complex(c2 * c1, c2 * t1 + t2)
+
+    def inverse(self) -> "Similarity":
+        c, t = self._complex()
+        return self._from_complex(1 / c, -t / c)
+
+    def power(self, t: float) -> "Similarity":
+        """This transform applied ``t`` times (any real ``t``: roots too)."""
+        c, b = self._complex()
+        if t == 1:
+            return self
+        ct = cmath.exp(t * cmath.log(c)) if c != 0 else 0j
+        bt = b * t if abs(c - 1) < 1e-12 else b * (1 - ct) / (1 - c)
+        return self._from_complex(ct, bt)
+
+    def shifted(self, ox: float, oy: float) -> "Similarity":
+        """The same transform in coordinates whose origin is at ``(ox, oy)``:
+        ``T(-o) S T(o)`` (e.g. a motion measured on crops of a frame)."""
+        x, y = self.map(ox, oy)
+        return Similarity(self.a, self.b, float(x) - ox, float(y) - oy)

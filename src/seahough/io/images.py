@@ -214,3 +214,37 @@ def to_gray(image, *, name: str = "image", max_pixels: int = 200_000_000,
         code = cv2.COLOR_BGRA2GRAY if a.shape[2] == 4 else cv2.COLOR_BGR2GRAY
         a = cv2.cvtColor(np.ascontiguousarray(a), code)
     return np.ascontiguousarray(a, dtype=np.float32)
+
+
+def to_bgr8(image) -> np.ndarray:
+    """An image array as 8-bit BGR, for writing and drawing.
+
+    Grey (HxW or HxWx1), BGR and BGRA arrays are accepted. uint8 is kept
+    as it is; uint16 is divided by 257; floats whose maximum is at most 1 are
+    taken as [0, 1] and multiplied by 255, other floats and integers are
+    clipped to [0, 255] (NaN becomes 0).
+
+    Examples
+    --------
+    >>> to_bgr8(np.full((2, 3), 0.5)).shape, to_bgr8(np.full((2, 3), 0.5))[0, 0]
+    ((2, 3, 3), array([127, 127, 127], dtype=uint8))
+    >>> int(to_bgr8(np.full((2, 2), 65535, np.uint16))[0, 0, 0])
+    255
+    """
+    a = np.asarray(image)
+    if a.ndim == 3 and a.shape[2] == 1:
+        a = a[:, :, 0]
+    if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[2] not in (3, 4)):
+        raise ImageValueError(f"expected a grey, BGR or BGRA image, got an array of shape {a.shape}")
+    if a.dtype == np.uint16:
+        a = a.astype(np.float32) / 257.0
+    if a.dtype != np.uint8:
+        a = a.astype(np.float32)
+        if a.size and np.nanmax(a) <= 1.0:
+            a = a * 255.0
+        a = np.clip(np.nan_to_num(a), 0, 255).astype(np.uint8)
+    if a.ndim == 2:
+        return cv2.cvtColor(a, cv2.COLOR_GRAY2BGR)
+    if a.shape[2] == 4:
+        return cv2.cvtColor(a, cv2.COLOR_BGRA2BGR)
+    return a
