@@ -363,7 +363,7 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
             plot.plot_detections(img, dets, ov, pattern=pat, title=head)
             plot.plot_accumulator(res.planes, dets, ac, title=f"{Path(name).name}: accumulator",
                                   note=res.note)
-            plot.plot_edges(img, res.features, ed, config=cfg,
+            plot.plot_edges(img, res.features, ed,
                             title=f"{Path(name).name}: what the detector sees")
             written = {"overlay": str(ov), "accumulator": str(ac), "edges": str(ed)}
         if not dets:

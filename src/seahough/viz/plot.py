@@ -687,8 +687,8 @@ def plot_accumulator(planes, detections=(), path=None, *, title=None, note=None)
 
 
 # ----------------------------------------------------------------------------- edges
-def plot_edges(image, features=None, path=None, *, config=None, title=None) -> Figure:
-    """What the detector sees: the working image, and its gradient magnitude
+def plot_edges(image, features, path=None, *, title=None) -> Figure:
+    """What the detector saw: the working image, and its gradient magnitude
     with the chosen key points and the edge segments traced from them
     (the paper's Figs. 1-3), in working-image pixels. For tuning
     ``Config.n_keypoints``, ``min_gradient``, ``downscale`` and ``equalize``.
@@ -696,14 +696,12 @@ def plot_edges(image, features=None, path=None, *, config=None, title=None) -> F
     Parameters
     ----------
     image : ndarray or path
-        The photo (used when ``features`` is None, and for the title).
-    features : Features, optional
-        ``SearchResult.features``; computed from ``image`` with ``config``
-        when None.
+        The photo the features were computed from (not read again: the
+        working image is in ``features``).
+    features : Features
+        ``SearchResult.features`` (or :func:`seahough.core.features.extract_features`).
     path : str or Path, optional
         Where to save the PNG.
-    config : Config, optional
-        Used only when ``features`` is None.
     title : str, optional
 
     Returns
@@ -711,15 +709,8 @@ def plot_edges(image, features=None, path=None, *, config=None, title=None) -> F
     matplotlib.figure.Figure
         1300 x 560 px.
     """
-    from ..config import Config
-    from ..core.features import extract_features
-    from ..io.images import to_gray
-    from ..core.preprocess import choose_factor
-
     if features is None:
-        cfg = config or Config()
-        gray = to_gray(image, max_pixels=cfg.max_pixels)
-        features = extract_features(gray, choose_factor(gray.shape, cfg), cfg)
+        raise ValueError("plot_edges needs the search's features (SearchResult.features)")
     g = features.gradients
     mag = np.asarray(g.magnitude, float)
     h, w = mag.shape
