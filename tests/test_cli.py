@@ -217,7 +217,7 @@ def test_bad_image_among_good_ones(scenes):
 
 def test_detect_out_writes_pngs(scenes, tmp_path):
     d, _ = scenes
-    from seahough.viz.plot import detections_size
+    from seahough.viz import detections_size
 
     proc = run("detect", d / "pattern.png", d / "scene.png", d / "neg.png", "--out", tmp_path,
                "--json", "--quiet")
@@ -509,7 +509,7 @@ def test_odometry_resume_after_a_killed_run(sequence_dir, tmp_path):
 
 
 def test_demo_end_to_end(tmp_path):
-    from seahough.viz.plot import detections_size
+    from seahough.viz import detections_size
 
     proc = run("demo", "--out", tmp_path / "demo", "--quiet", timeout=120)
     assert proc.returncode == 0, proc.stdout + proc.stderr

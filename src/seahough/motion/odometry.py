@@ -845,7 +845,7 @@ def _plot_trajectory(csv_path, path: Path, metric: bool):
                   "flags": r.get("flags")} for r in _iter_odometry_csv(csv_path)]
     unit = "m" if metric else "px"
     try:
-        from ..viz.plot import plot_trajectory
+        from ..viz import plot_trajectory
     except ImportError:
         plot_trajectory = None
     if plot_trajectory is not None:

@@ -29,7 +29,7 @@ from matplotlib.figure import Figure
 from ..geometry import format_angle
 
 __all__ = ["plot_detections", "plot_accumulator", "plot_edges", "plot_trajectory",
-           "save_mosaic", "DPI"]
+           "save_mosaic", "detections_size", "scale_angle_marker", "DPI"]
 
 #: Resolution of every figure (pixels per inch); sizes below are in pixels.
 DPI = 100
