@@ -199,17 +199,19 @@ def test_a_frames_confidence_counts_every_other_candidate_pose(monkeypatch):
 def test_screening_a_frames_rivals_keeps_the_answer_and_its_confidence(monkeypatch, seq, i, j,
                                                                        side, share):
     # a frame's rival candidates that fit far worse than the best after their
-    # first short ICP are not refined further (Detector._screen): the same
+    # first short ICP are not refined further (Config.search.screen): the same
     # motion, the confidence within 0.04, with fewer ICPs. On the pool at
     # 640x360, 5 -> 7, a tile-shifted look-alike fits (0.51 against 0.78) only
     # from its second scale: screening that second start too gave 0.70 for 0.54
     import cv2
-    import seahough.core.detector as D
+    import dataclasses
+    import seahough.core.candidates as C
+    from seahough.motion.pair import MOTION_CONFIG
 
     calls = []
-    refine = D.refine
+    refine = C.refine
     # (the ICPs: scoring a pose, radii=(), costs little)
-    monkeypatch.setattr(D, "refine", lambda *a, **k: (k.get("radii") != () and calls.append(1))
+    monkeypatch.setattr(C, "refine", lambda *a, **k: (k.get("radii") != () and calls.append(1))
                         or refine(*a, **k))
     files = sorted(p for p in data_path("sequences", seq).iterdir()
                    if p.suffix.lower() in (".png", ".jpg"))
@@ -221,8 +223,8 @@ def test_screening_a_frames_rivals_keeps_the_answer_and_its_confidence(monkeypat
     screened = seahough.estimate_motion(a, b)
     n_screened = len(calls)
     calls.clear()
-    monkeypatch.setattr(D.Detector, "_screen", 0.0)
-    full = seahough.estimate_motion(a, b)
+    unscreened = MOTION_CONFIG.replace(search=dataclasses.replace(MOTION_CONFIG.search, screen=0.0))
+    full = seahough.estimate_motion(a, b, config=unscreened)
     assert screened is not None and full is not None
     np.testing.assert_allclose(screened.matrix, full.matrix, atol=1e-9)
     assert abs(screened.confidence - full.confidence) < 0.04

@@ -17,6 +17,81 @@ VOTING_MODES = ("oriented", "points", "segments")
 
 
 @dataclass(frozen=True)
+class SearchTuning:
+    """Fixed choices of the candidate and ranking stages (``Config.search``).
+
+    Measured values, kept together so that a search's every number lives on
+    :class:`Config`; ``docs/method.md`` says how each was chosen. Change them
+    to experiment, not to tune a data set.
+
+    Parameters
+    ----------
+    peak_radius : int
+        Largest radius (translation bins) of a local maximum of the dx-dy plane.
+    overlap : float
+        Two detections are one object when the smaller one's footprint lies
+        more than this share inside the other's.
+    good_fit : float
+        A candidate refined from its best scale seed that scores this much is
+        not tried from its second seed.
+    full_treatment : int
+        The first this many candidates get a short ICP from each scale seed.
+    icp_points : int
+        Pattern points the candidate ICPs iterate on (all score at the end).
+    icp_iterations : int
+        Iterations of each candidate ICP stage.
+    max_radius : float
+        Largest first match radius of a candidate ICP (working px).
+    look_radius : float
+        Match radius of the single pass that orders the seeds (working px).
+    top_votes : int
+        The strongest accumulator peaks, refined first whatever their look.
+    neighbour_seeds : int
+        Peaks whose 5x5 neighbourhood is searched for a second seed (a
+        self-similar shape's smaller copy in its own corner).
+    screen : float
+        A whole frame's rival whose first short ICP fits below this share of
+        the best candidate so far is scored there and not refined further
+        (only its scale seeds are screened: a tile-shifted look-alike on the
+        pool, 0.51 against 0.78 refined, was found only from its second scale).
+    min_finish_points : int
+        Fewer full-resolution finishing points than this: the working-scale
+        pose is the answer (a frame too faint or blurred at full resolution).
+    band_slack : float
+        How far (px) the full-resolution refinement may move the pose beyond
+        its first match radius, when its edges are limited to a band.
+
+    Examples
+    --------
+    >>> Config(search=SearchTuning(screen=0.0)).search.screen
+    0.0
+    """
+
+    peak_radius: int = 1
+    overlap: float = 0.3
+    good_fit: float = 0.7
+    full_treatment: int = 4
+    icp_points: int = 100
+    icp_iterations: int = 4
+    max_radius: float = 6.0
+    look_radius: float = 3.0
+    top_votes: int = 3
+    neighbour_seeds: int = 6
+    screen: float = 0.5
+    min_finish_points: int = 8
+    band_slack: float = 2.0
+
+    def __post_init__(self) -> None:
+        for name in ("peak_radius", "full_treatment", "icp_points", "icp_iterations",
+                     "top_votes", "neighbour_seeds", "min_finish_points"):
+            number(f"Config.search.{name}", getattr(self, name), lo=0, hi=100_000, integer=True)
+        for name in ("overlap", "good_fit", "screen"):
+            number(f"Config.search.{name}", getattr(self, name), lo=0.0, hi=1.0)
+        for name in ("max_radius", "look_radius", "band_slack"):
+            number(f"Config.search.{name}", getattr(self, name), lo=0.0, hi=1000.0)
+
+
+@dataclass(frozen=True)
 class Config:
     """Parameters of every stage, with defaults that suit 640x480 photos.
 
@@ -102,6 +177,8 @@ class Config:
         edge points (point-to-edge distances), finishing at full resolution.
     max_pixels : int
         Images with more pixels are refused (decompression-bomb guard).
+    search : SearchTuning
+        Fixed choices of the candidate and ranking stages.
     """
 
     downscale: float | None = None
@@ -128,6 +205,7 @@ class Config:
     n_candidates: int = 7
     refine: bool = True
     max_pixels: int = 200_000_000
+    search: SearchTuning = SearchTuning()
 
     def __post_init__(self) -> None:
         def check(name, **limits):
@@ -156,6 +234,8 @@ class Config:
         for name in ("local_contrast", "equalize", "refine"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise ParameterError(f"Config.{name}={getattr(self, name)!r}: must be True or False")
+        if not isinstance(self.search, SearchTuning):
+            raise ParameterError("Config.search must be a seahough.config.SearchTuning")
         if self.voting not in VOTING_MODES:
             raise ParameterError(f"Config.voting={self.voting!r}: must be one of "
                                  f"{', '.join(VOTING_MODES)}")

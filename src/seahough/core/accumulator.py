@@ -11,6 +11,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -173,13 +174,40 @@ def make_bins(pf: PatternFeatures, scale_range, angle_range, region, config: Con
                 scale_known, angle_known)
 
 
-def accumulate(pf: PatternFeatures, seg: Segments, bins: Bins, either: bool = False):
-    """Vote every pattern point / image segment pair; returns the raw reduced
-    arrays ``(best_val, best_k, best_d, proj_sr)``.
+class Votes(NamedTuple):
+    """The accumulator, reduced as it was filled (see :func:`accumulate`)."""
+
+    best_val: np.ndarray      # (ny, nx): the highest cell over scale and rotation
+    best_k: np.ndarray        # its scale bin
+    best_d: np.ndarray        # its rotation slice
+    scale_angle: np.ndarray   # (n_scales, n_angles): the highest cell over translation
+
+
+def accumulate(pf: PatternFeatures, seg: Segments, bins: Bins, either: bool = False) -> Votes:
+    """Vote every pattern point / image segment pair into the accumulator of
+    ``bins``; returns its reductions as :class:`Votes`.
 
     Examples
     --------
-    See :func:`seahough.Detector.search`, which calls this.
+    A pattern searched for in its own image: the peak is at the pattern's
+    origin (to within a bin), at scale 1 and rotation 0.
+
+    >>> from seahough.core.pattern import Pattern
+    >>> from seahough.core.features import extract_features
+    >>> from seahough.config import Config
+    >>> p = Pattern.rectangle(60, 40)
+    >>> pf, cfg = p.features(1.0), Config()
+    >>> feats = extract_features(p.image.astype(np.float32), 1.0, cfg)
+    >>> h, w = p.image.shape
+    >>> bins = make_bins(pf, (0.8, 1.25), (0.0, 360.0), (0.0, 0.0, w - 1.0, h - 1.0), cfg)
+    >>> v = accumulate(pf, feats.segments, bins)
+    >>> y, x = np.unravel_index(np.argmax(v.best_val), v.best_val.shape)
+    >>> tx, ty = bins.tx0 + (x + 1) * bins.step, bins.ty0 + (y + 1) * bins.step
+    >>> bool(abs(tx - p.origin[0]) <= bins.step and abs(ty - p.origin[1]) <= bins.step)
+    True
+    >>> k = int(v.best_k[y, x])
+    >>> round(float(bins.scales[k]), 1)
+    1.0
     """
     px, py, pa, pw, p2x, p2y = pf.x, pf.y, pf.angle, pf.weight, pf.x2, pf.y2
     if either:  # each pattern point may appear with its gradient reversed
@@ -204,4 +232,15 @@ def accumulate(pf: PatternFeatures, seg: Segments, bins: Bins, either: bool = Fa
            float(bins.log_scale0), float(bins.log_step), int(bins.mode),
            float(bins.tx0), float(bins.ty0), float(bins.step), int(nxr), int(nyr),
            best_val, best_k, best_d, proj)
-    return best_val, best_k, best_d, proj
+    return Votes(best_val, best_k, best_d, proj)
+
+
+def planes(votes: Votes, bins: Bins, gradients) -> AccumulatorPlanes:
+    """The accumulator's planes in full-resolution image coordinates
+    (``gradients``: the searched image's :class:`~.preprocess.Gradients`)."""
+    cols = bins.tx0 + (np.arange(votes.best_val.shape[1]) + 1) * bins.step
+    rows = bins.ty0 + (np.arange(votes.best_val.shape[0]) + 1) * bins.step
+    xs, ys = gradients.to_full(cols, rows)
+    return AccumulatorPlanes(votes.best_val, votes.best_k, votes.best_d, votes.scale_angle,
+                             bins.scales.copy(), np.degrees(bins.angles) % 360.0,
+                             np.asarray(xs, float), np.asarray(ys, float))

@@ -98,7 +98,7 @@ class Pattern:
     --------
     >>> p = Pattern.rectangle(60, 40)
     >>> p.image.shape, p.origin
-    ((52, 72), (35.5, 25.5))
+    ((53, 73), (36.0, 26.0))
     """
 
     def __init__(self, image, mask=None, origin=None, *, polarity="bright", kind="image",
@@ -130,7 +130,14 @@ class Pattern:
         _check_polarity(polarity)
         self.polarity = polarity
         self.kind = kind
+        #: A rope, tether or pipe: the position along it is not measured.
         self.is_line = kind == "line"
+        #: A whole camera frame: no symmetry, its rivals screened, searched
+        #: at a working scale and finished on snapped points.
+        self.is_frame = kind == "frame"
+        #: A crop of a clear photo, searched through water: blurred first
+        #: (Config.pattern_blur).
+        self.from_photo = kind == "image"
         if outline is None:
             outline = self._outline_from_mask()
         self.outline = [np.asarray(o, float).reshape(-1, 2) for o in outline]
@@ -143,7 +150,7 @@ class Pattern:
         # full resolution, see finish_points): check it there, at the scale a
         # search of a frame of its own size chooses (as estimate_motion and
         # run_odometry do; another image size or config computes its own)
-        self.features(choose_factor(gray.shape, config or Config()) if kind == "frame" else 1.0,
+        self.features(choose_factor(gray.shape, config or Config()) if self.is_frame else 1.0,
                       config)
 
     # ------------------------------------------------------------ constructors
@@ -324,7 +331,7 @@ class Pattern:
                 config.n_verify_points, config.min_gradient, config.segment_steps,
                 config.segment_angle_tol, config.max_segments, config.equalize,
                 config.local_contrast, config.local_window,
-                config.pattern_blur if self.kind == "image" else 0.0)
+                config.pattern_blur if self.from_photo else 0.0)
 
     def finish_points(self, factor: float, config: Config | None = None):
         """``(vx, vy, vangle)``: the points that refine a pose found at working
@@ -345,7 +352,7 @@ class Pattern:
         keeps its working-scale pose).
         """
         config = config or Config()
-        if self.kind != "frame" or factor >= 0.999:
+        if not self.is_frame or factor >= 0.999:
             f = self.features(1.0, config)
             return f.vx, f.vy, f.vangle
         key = ("finish",) + self._features_key(factor, config) + (config.angle_tolerance,)
@@ -381,7 +388,7 @@ class Pattern:
         gray = self._gray
         if self.polarity == "dark":
             gray = 255.0 - gray
-        if self.kind == "image" and config.pattern_blur > 0:
+        if self.from_photo and config.pattern_blur > 0:
             # a crop of a clear photo, searched through water: its finest
             # texture would not be there to match (Config.pattern_blur)
             gray = cv2.GaussianBlur(np.ascontiguousarray(gray, np.float32), (0, 0),

@@ -1,0 +1,373 @@
+"""Stage 5: accumulator peaks -> candidate poses, refined and scored at the
+working scale.
+
+The peaks of the dx-dy plane are seeds; each is looked at cheaply (a single
+matching pass at its cell's scale and the neighbouring ones), the most
+promising are refined by ICP (:mod:`.refine`), and the distinct refined
+poses are the candidates that :mod:`.ranking` finishes at full resolution.
+:class:`PoseComparison` says when two poses are the same answer.
+
+Everything a search shares lives on a :class:`SearchContext` made afresh for
+each search, so one :class:`~seahough.Detector` can serve several threads.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from . import kernels as K
+from ..config import Config
+from .accumulator import Bins, Votes
+from .features import Features
+from .pattern import Pattern, PatternFeatures
+from .refine import Fit, Pose, refine
+
+
+@dataclass
+class Candidate:
+    """A refined pose at the working scale, and later at full resolution."""
+
+    fit: Fit                  # working-scale pose and score
+    votes: float              # height of its accumulator peak
+    work_score: float         # score at the working scale
+    full: Fit | None = None   # the full-resolution finish (ranking)
+
+
+@dataclass(frozen=True)
+class Seed:
+    """An accumulator cell worth refining."""
+
+    look: float               # score of its best first look (a single matching pass)
+    votes: float              # height of its cell
+    tx: float                 # the cell's translation (working px)
+    ty: float
+    scales: tuple             # scale bins to start from, the best-looking first
+    angle: float              # the cell's rotation (radians)
+    is_peak: bool             # a local maximum (else a neighbour of one)
+
+
+class PoseComparison:
+    """Which poses are the same answer, for one pattern at one working scale.
+
+    Parameters
+    ----------
+    pattern : Pattern
+    pf : PatternFeatures
+        The pattern's points at the search's working scale.
+    step : float
+        The accumulator's translation bin (working px).
+    scale_range, angle_range : (float, float)
+        The searched ranges (as validated by :func:`.accumulator.check_ranges`).
+    tuning_overlap : float
+        ``Config.search.overlap``.
+
+    Examples
+    --------
+    >>> p = Pattern.rectangle(60, 40)
+    >>> cmp = PoseComparison(p, p.features(1.0), 3.0, (0.5, 2.0), (0.0, 360.0), 0.3)
+    >>> a = Pose.from_params(100.0, 80.0, 1.0, 0.0)
+    >>> cmp.close(a, Pose.from_params(100.5, 80.0, 1.0, 0.0))
+    True
+    >>> cmp.equivalent(a, Pose.from_params(100.0, 80.0, 1.0, math.pi))  # turned by 180 deg
+    True
+    >>> cmp.same(a, Pose.from_params(160.0, 80.0, 1.0, 0.0), 1.0)
+    False
+    """
+
+    def __init__(self, pattern: Pattern, pf: PatternFeatures, step: float, scale_range,
+                 angle_range, tuning_overlap: float):
+        self.pattern = pattern
+        self.scale_range = scale_range
+        self.angle_range = angle_range
+        self.overlap = tuning_overlap
+        self.points = np.stack([pf.vx, pf.vy], 1).astype(float)
+        self.probe = self.points[:: max(1, pf.vx.size // 64)]
+        self.centre = tuple(float(v) for v in self.points.mean(axis=0))
+        hull = cv2.convexHull(np.vstack(pattern.outline).astype(np.float32)).reshape(-1, 2)
+        self.footprint = hull.astype(float) - np.asarray(pattern.origin)  # pattern px, from origin
+        self.close_px = max(2.0 * step, 3.0)
+
+    def pose_ok(self, pose: Pose) -> bool:
+        """A finite pose whose scale is not far outside the searched range."""
+        s0, s1 = self.scale_range
+        return 0.8 * s0 <= pose.scale <= 1.25 * s1 and math.isfinite(pose.tx) and math.isfinite(pose.ty)
+
+    def outside_ranges(self, scale: float, angle: float) -> bool:
+        """Is a refined pose outside the searched ranges (with a little slack)?"""
+        s0, s1 = self.scale_range
+        if not s0 / 1.02 <= scale <= s1 * 1.02:
+            return True
+        a0, a1 = self.angle_range
+        period = 180.0 if self.pattern.is_line else 360.0
+        if a1 - a0 >= period:
+            return False
+        d = (angle - a0) % period  # how far past the range's start
+        return (a1 - a0) + 1.0 < d < period - 1.0
+
+    def same(self, a: Pose, b: Pose, factor: float) -> bool:
+        """Do two poses describe the same object (or the same line)?"""
+        p = self.pattern
+        if p.is_line:
+            ta, tb = math.radians(a.angle), math.radians(b.angle)
+            if abs(((math.degrees(ta - tb) + 90) % 180) - 90) > 10:
+                return False
+            n = np.array([math.sin(ta), math.cos(ta)])
+            d = abs(n @ np.array([a.tx - b.tx, a.ty - b.ty]))
+            return d < max(p.line_width * factor * max(a.scale, b.scale), 2.0)
+        r = 0.35 * p.extent * factor * min(a.scale, b.scale)
+        if math.hypot(a.tx - b.tx, a.ty - b.ty) < r:
+            return True
+        # overlapping footprints: a smaller copy in a self-similar shape's
+        # corner, or a turned copy sharing some of its edges
+        fa, fb = self.placed(a, factor), self.placed(b, factor)
+        inter, _ = cv2.intersectConvexConvex(fa, fb)
+        smaller = min(cv2.contourArea(fa), cv2.contourArea(fb))
+        return smaller > 0 and inter > self.overlap * smaller
+
+    def placed(self, pose: Pose, factor: float) -> np.ndarray:
+        """The pattern's convex footprint placed at ``pose``."""
+        fp = self.footprint * factor
+        qx, qy = pose.map(fp[:, 0], fp[:, 1])
+        return np.stack([qx, qy], 1).astype(np.float32)
+
+    def centre_gap(self, a: Pose, b: Pose) -> float:
+        """Distance between the pattern points' centre placed by ``a`` and by ``b``."""
+        cx, cy = self.centre
+        dx = (a.tx - b.tx) + (a.a - b.a) * cx + (a.b - b.b) * cy
+        dy = (a.ty - b.ty) - (a.b - b.b) * cx + (a.a - b.a) * cy
+        return math.hypot(dx, dy)
+
+    def close(self, a: Pose, b: Pose) -> bool:
+        """Practically the same pose: the pattern's points move less than
+        ~2 working pixels between the two."""
+        if self.centre_gap(a, b) >= self.close_px:
+            return False
+        pts = self.probe
+        ax, ay = a.map(pts[:, 0], pts[:, 1])
+        bx, by = b.map(pts[:, 0], pts[:, 1])
+        return float(np.max(np.hypot(ax - bx, ay - by))) < self.close_px
+
+    def equivalent(self, a: Pose, b: Pose) -> bool:
+        """The same answer in another guise: the pattern's edge points placed
+        by ``a`` and by ``b`` coincide as sets (a symmetric shape turned onto
+        itself, e.g. a rectangle by 180 degrees)."""
+        # a camera frame has no symmetry, and its points cover it so densely
+        # that any nearby pose would pass the test below
+        if self.pattern.is_frame:
+            return False
+        # point sets that coincide have (nearly) the same centre: a cheap test first
+        if self.centre_gap(a, b) > 3.0 * self.close_px:
+            return False
+        ax, ay = a.map(self.probe[:, 0], self.probe[:, 1])
+        bx, by = b.map(self.points[:, 0], self.points[:, 1])
+        d = np.sqrt(((ax[:, None] - bx[None, :]) ** 2 + (ay[:, None] - by[None, :]) ** 2).min(axis=1))
+        # the 90th percentile (as np.percentile interpolates it), by partition: faster
+        n = d.size
+        pos = 0.9 * (n - 1)
+        lo = int(pos)
+        hi = min(lo + 1, n - 1)
+        part = np.partition(d, (lo, hi))
+        q90 = part[lo] + (pos - lo) * (part[hi] - part[lo])
+        return float(q90) < self.close_px
+
+
+@dataclass
+class SearchContext:
+    """What the stages of one search share (made afresh for each search)."""
+
+    pattern: Pattern
+    pf: PatternFeatures
+    features: Features
+    bins: Bins
+    factor: float
+    config: Config
+    scale_range: tuple
+    angle_range: tuple
+    max_results: int
+    min_score: float
+    compare: PoseComparison
+
+    @property
+    def scale_known(self) -> bool:
+        return self.scale_range[0] == self.scale_range[1]
+
+    @property
+    def angle_known(self) -> bool:
+        return self.angle_range[0] == self.angle_range[1]
+
+
+def peaks(best_val: np.ndarray, radius: int, n: int):
+    """``(ys, xs, heights)`` of the local maxima of the dx-dy plane, highest
+    first, at most ``4 n``.
+
+    Examples
+    --------
+    >>> plane = np.zeros((5, 6), np.float32); plane[1, 4] = 2.0; plane[3, 1] = 1.0
+    >>> ys, xs, v = peaks(plane, 1, 1)
+    >>> [(int(y), int(x), float(h)) for y, x, h in zip(ys, xs, v)]
+    [(1, 4, 2.0), (3, 1, 1.0)]
+    """
+    ys, xs = K.local_maxima(best_val, int(radius))
+    v = best_val[ys, xs]
+    order = np.argsort(-v, kind="stable")[: 4 * n]
+    return ys[order], xs[order], v[order]
+
+
+def _seed_cells(ctx: SearchContext, votes: Votes):
+    """The accumulator cells to refine: ``(y, x, height, is_peak)``."""
+    cfg, p, bins, tune = ctx.config, ctx.pattern, ctx.bins, ctx.config.search
+    best_val, best_k, best_d = votes.best_val, votes.best_k, votes.best_d
+    s0 = ctx.scale_range[0]
+    if p.is_line:
+        radius = max(1, int(round(0.5 * p.line_width * s0 * ctx.factor / bins.step)))
+    else:
+        radius = int(np.clip(round(0.25 * p.extent * s0 * ctx.factor / bins.step), 1,
+                             tune.peak_radius))
+    ys, xs, vs = peaks(best_val, radius, cfg.n_candidates)
+    known = bins.scale_known and bins.angle_known
+    n_peaks = ctx.max_results + 1 if known else cfg.n_candidates + 4
+    cells = []
+    ny, nx = best_val.shape
+    for i, (yy, xx, v) in enumerate(list(zip(ys, xs, vs))[:n_peaks]):
+        if known and v < 0.25 * vs[0]:
+            break  # a sharp 2-D accumulator: far lower peaks cannot reach min_score
+        cells.append((yy, xx, v, True))
+        if known or i >= tune.neighbour_seeds:  # (one scale, one rotation: nothing beside)
+            continue
+        # a self-similar shape (L, rectangle) puts a smaller copy in its
+        # own corner: the true cell may sit next to the peak, below it
+        y0, y1, x0, x1 = max(yy - 2, 0), min(yy + 3, ny), max(xx - 2, 0), min(xx + 3, nx)
+        win = best_val[y0:y1, x0:x1]
+        for j in np.argsort(-win, axis=None)[1:]:
+            wy, wx = divmod(int(j), win.shape[1])
+            cy, cx = y0 + wy, x0 + wx
+            dk = abs(int(best_k[cy, cx]) - int(best_k[yy, xx]))
+            dd = abs(int(best_d[cy, cx]) - int(best_d[yy, xx]))
+            if dk >= 2 or dd >= 2:
+                if win[wy, wx] >= 0.6 * v:
+                    cells.append((cy, cx, float(win[wy, wx]), False))
+                break
+    return cells
+
+
+def seeds(ctx: SearchContext, votes: Votes, look_points, look_radius: float) -> list:
+    """The :class:`Seed` of each cell worth refining, in the order they are
+    refined: the strongest peaks first (a big pattern's coarse pose can look
+    poor), then the others by how well they look."""
+    p, bins, feats = ctx.pattern, ctx.bins, ctx.features
+    sx, sy, sa = look_points
+    tol = math.radians(ctx.config.angle_tolerance)
+    known = bins.scale_known and bins.angle_known
+    out = []
+    for yy, xx, v, is_peak in _seed_cells(ctx, votes):
+        tx = bins.tx0 + (xx + 1) * bins.step
+        ty = bins.ty0 + (yy + 1) * bins.step
+        k0 = int(votes.best_k[yy, xx])
+        angle = float(bins.angles[votes.best_d[yy, xx]])
+        if known:  # one scale: nothing to choose, refinement will judge it
+            out.append(Seed(float(v), float(v), tx, ty, (k0,), angle, is_peak))
+            continue
+        by_k = []
+        for k in sorted(range(max(k0 - 1, 0), min(k0 + 2, bins.scales.size)), key=lambda k: abs(k - k0)):
+            pose = Pose.from_params(tx, ty, float(bins.scales[k]), angle)
+            by_k.append((refine(pose, sx, sy, sa, feats.edges, feats.index, radii=(),
+                                angle_tol=tol, either=p.either, score_radius=look_radius).score, k))
+        by_k.sort(key=lambda t: -t[0])
+        # the look only orders the seeds: a poor first look can still refine
+        # to the object when nothing better claims the refinement budget
+        out.append(Seed(by_k[0][0], float(v), tx, ty, tuple(k for _, k in by_k), angle, is_peak))
+    top = [i for i, s in enumerate(out) if s.is_peak][: ctx.config.search.top_votes]
+    return [out[i] for i in top] + sorted((s for i, s in enumerate(out) if i not in top),
+                                          key=lambda s: -s.look)
+
+
+def find_candidates(ctx: SearchContext, votes: Votes) -> list:
+    """Refine the accumulator's most promising cells into distinct candidate
+    poses at the working scale, best first (at most ``Config.n_candidates``)."""
+    cfg, p, bins, pf, feats = ctx.config, ctx.pattern, ctx.bins, ctx.pf, ctx.features
+    tune = cfg.search
+    cmp = ctx.compare
+    tol = math.radians(cfg.angle_tolerance)
+    # iterate on a subset of the points; score with all of them at the end
+    sub = np.unique(np.linspace(0, pf.vx.size - 1, min(tune.icp_points, pf.vx.size)).astype(int))
+    sx, sy, sa = (np.ascontiguousarray(v[sub]) for v in (pf.vx, pf.vy, pf.vangle))
+    # the short ICPs that pick a scale seed use half of them, but a big
+    # pattern (a whole frame) needs them all
+    msub = sub[:: 2] if pf.radius < 40 else sub
+    mx, my, ma = (np.ascontiguousarray(v[msub]) for v in (pf.vx, pf.vy, pf.vangle))
+    score_r = max(1.25, cfg.match_radius * ctx.factor)
+    r0 = float(np.clip(1.5 * bins.step, 2.0, tune.max_radius))
+    radii = (r0, max(0.6 * r0, 1.5), 1.25)
+    # screen every peak with cheap single matching passes, at the cell's
+    # best scale and its neighbours: the cell's best scale can be a bin or
+    # two off (a smaller copy fitting part of the object)
+    todo = seeds(ctx, votes, (sx, sy, sa), min(r0, tune.look_radius))
+    known = bins.scale_known and bins.angle_known
+    edges, index = feats.edges, feats.index
+
+    def icp(start, px, py, pa, rad, iterations, fix_scale, fix_angle):
+        return refine(start, px, py, pa, edges, index, radii=rad, iterations=iterations,
+                      angle_tol=tol, either=p.either, fix_scale=fix_scale, fix_angle=fix_angle,
+                      score_radius=score_r)
+
+    def score(pose):  # all the points, no refinement
+        return refine(pose, pf.vx, pf.vy, pf.vangle, edges, index, radii=(), angle_tol=tol,
+                      either=p.either, score_radius=score_r)
+
+    out: list[Candidate] = []
+    # a whole frame's other candidates are mostly chance matches of its
+    # texture, there to measure the runner-up: one that fits far worse than
+    # the best so far after its first short ICP is scored there (tune.screen)
+    screen = p.is_frame and not known
+    for rank, sd in enumerate(todo):
+        if len(out) >= cfg.n_candidates:
+            break
+        ks, v, tx, ty, angle = sd.scales, sd.votes, sd.tx, sd.ty, sd.angle
+        lead = tune.screen * max((c.work_score for c in out), default=0.0)
+        start = Pose.from_params(tx, ty, float(bins.scales[ks[0]]), angle)
+        if rank < tune.full_treatment and cfg.refine and len(ks) > 1:
+            # scale and position trade off along a corner: a short ICP from
+            # each scale seed, then the full one from the best of them
+            best = -1.0
+            for k in ks:
+                pose = Pose.from_params(tx, ty, float(bins.scales[k]), angle)
+                f = icp(pose, mx, my, ma, radii[:2], 3, bins.scale_known, bins.angle_known)
+                if f.score > best:
+                    best, start = f.score, f.pose
+                if screen and best < lead:
+                    break
+            if screen and best < lead:
+                fit = score(start)
+                if cmp.pose_ok(fit.pose) and not any(cmp.close(fit.pose, c.fit.pose) for c in out):
+                    out.append(Candidate(fit, v, fit.score))
+                continue
+        if known:  # only the translation moves: refine on the subset, score with all
+            fit = icp(start, sx, sy, sa, radii if cfg.refine else (), tune.icp_iterations,
+                      True, True)
+            fit = score(fit.pose)
+        else:
+            starts = [start]
+            if not (rank < tune.full_treatment and len(ks) > 1) and len(ks) > 1:
+                starts.append(Pose.from_params(tx, ty, float(bins.scales[ks[1]]), angle))
+            fit = None
+            for st in starts:  # the second-best scale only when the first is not good
+                f = icp(st, sx, sy, sa, radii if cfg.refine else (), tune.icp_iterations,
+                        bins.scale_known, bins.angle_known)
+                if fit is None or f.score > fit.score:
+                    fit = f
+                if fit.score >= tune.good_fit:
+                    break
+            if not cmp.pose_ok(fit.pose):
+                continue
+            fit = score(fit.pose)
+        # two peaks may converge on one pose; distinct poses all stay
+        # candidates (object-level suppression comes after ranking)
+        if any(cmp.close(fit.pose, c.fit.pose) for c in out):
+            continue
+        out.append(Candidate(fit, v, fit.score))
+    out.sort(key=lambda c: -c.work_score)
+    return out

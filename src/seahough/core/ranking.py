@@ -1,0 +1,285 @@
+"""Stage 7: candidates -> detections.
+
+The promising candidates are refined once more on the full-resolution image,
+ranked, reduced to distinct objects, and rated against the best other
+candidate (the runner-up): that is their confidence. The result is a list of
+:class:`Detection`, best first.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..geometry import apply_matrix, pose_to_matrix
+from .candidates import Candidate, SearchContext
+from .features import Features
+from .keypoints import edge_points_near
+from .preprocess import compute_gradients
+from .refine import Fit, Pose, refine
+
+#: Flag on line detections: the position along the line is not measured.
+FLAG_ALONG_LINE = "position_along_line_undetermined"
+#: Flag when the detection lies partly outside the image.
+FLAG_PARTIAL = "partly_outside_image"
+#: Flag when a close runner-up makes the detection doubtful.
+FLAG_AMBIGUOUS = "ambiguous"
+#: Flag when refinement took the scale or rotation outside the searched
+#: ranges (by more than 2 % or 1 degree): the object may be there at a size
+#: or turn that was not asked for.
+FLAG_OUTSIDE_RANGE = "outside_search_range"
+
+
+@dataclass
+class Detection:
+    """One instance of the pattern found in an image.
+
+    Attributes
+    ----------
+    x, y : float
+        Where the pattern origin lies, in full-resolution image pixels.
+    scale : float
+        Size in the image relative to the pattern (equation 1's rho).
+    angle : float
+        Rotation in degrees [0, 360), counter-clockwise as displayed (phi).
+    score : float
+        Share of the pattern's edge points found in the image at this pose
+        (0-1), after refinement.
+    confidence : float
+        How distinct this find is: ``(score - r) / (1 - r)``, where ``r`` is
+        the score of the best other candidate that is not one of the returned
+        detections (the share of what the runner-up leaves unexplained that
+        this find explains; 0: no better than the clutter, 1: unique). Both
+        scores are measured at the working scale.
+    matrix : ndarray (2, 3)
+        Pattern-image pixel (x, y) -> image pixel (x, y); the matrix
+        ``cv2.warpAffine(pattern.image, matrix, (w, h))`` takes.
+    outline : list of ndarray
+        The pattern's outline polylines in image pixels.
+    votes : float
+        Height of the accumulator peak (share of the voting points).
+    kind : str
+        ``"object"``, or ``"line"`` for line patterns.
+    line_angle, line_offset : float or None
+        For lines: direction in degrees [0, 180) (counter-clockwise from +x as
+        displayed) and the signed distance in pixels from the image centre
+        ``((w-1)/2, (h-1)/2)`` to the line, positive when the line lies on
+        the side of the normal ``(sin a, cos a)`` (i.e. below the centre for a
+        horizontal line). ``x, y`` is then the point of the line nearest the
+        image centre.
+    flags : tuple of str
+        Warnings about this result (see the ``FLAG_*`` constants).
+    """
+
+    x: float
+    y: float
+    scale: float
+    angle: float
+    score: float
+    confidence: float
+    matrix: np.ndarray
+    outline: list = field(default_factory=list)
+    votes: float = 0.0
+    kind: str = "object"
+    line_angle: float | None = None
+    line_offset: float | None = None
+    flags: tuple = ()
+
+    def to_dict(self) -> dict:
+        """Plain-Python form for JSON.
+
+        >>> d = Detection(1.0, 2.0, 1.0, 0.0, 0.9, 0.8, np.eye(2, 3))
+        >>> sorted(d.to_dict())[:4]
+        ['angle', 'confidence', 'flags', 'kind']
+        """
+        d = {"x": self.x, "y": self.y, "scale": self.scale, "angle": self.angle,
+             "score": self.score, "confidence": self.confidence,
+             "matrix": np.asarray(self.matrix).tolist(), "votes": self.votes,
+             "kind": self.kind, "flags": list(self.flags)}
+        if self.kind == "line":
+            d["line_angle"] = self.line_angle
+            d["line_offset"] = self.line_offset
+        return d
+
+
+def confidence(score: float, runner_up: float) -> float:
+    """How distinct a find is from the best other candidate: of the pattern
+    that the runner-up leaves unexplained, the share the find explains.
+
+    Examples
+    --------
+    >>> round(confidence(1.0, 0.88), 2), round(confidence(0.55, 0.5), 2)
+    (1.0, 0.1)
+    """
+    return float(np.clip((score - runner_up) / max(1.0 - runner_up, 1e-9), 0.0, 1.0))
+
+
+def line_parameters(x: float, y: float, angle_deg: float, shape) -> tuple[float, float, float, float]:
+    """(line_angle, line_offset, foot_x, foot_y) of the line through (x, y) at
+    ``angle_deg``, relative to the centre of an image of ``shape``.
+
+    Examples
+    --------
+    >>> [round(v, 6) for v in line_parameters(10.0, 30.0, 180.0, (41, 61))]
+    [0.0, 10.0, 30.0, 30.0]
+    """
+    h, w = shape[:2]
+    cx, cy = (w - 1) / 2.0, (h - 1) / 2.0
+    a = angle_deg % 180.0
+    t = math.radians(a)
+    n = np.array([math.sin(t), math.cos(t)])    # normal
+    off = float(n @ (np.array([x, y]) - [cx, cy]))
+    fx, fy = cx + off * n[0], cy + off * n[1]
+    return a, off, float(fx), float(fy)
+
+
+# ------------------------------------------------------------ full resolution
+def _full_pose(fit: Fit, features: Features) -> Pose:
+    tx, ty = features.gradients.to_full(fit.pose.tx, fit.pose.ty)
+    return Pose(fit.pose.a, fit.pose.b, float(tx), float(ty))
+
+
+def _full_radius(factor: float) -> float:
+    """First match radius of the full-resolution refinement (px): one working pixel."""
+    return max(1.0 / factor, 2.0)
+
+
+def _full_edges(ctx: SearchContext, gray, todo):
+    """Full-resolution edges near each candidate's pattern points, in a
+    box around them: one box around all candidates when that is cheaper
+    than one box each. Returns ``(box, edges, index)`` per candidate.
+
+    Edges farther from the pattern's points than the refinement's match
+    radius plus the distance it may move the pose could never be matched:
+    they are left out (finding them cost as much as the rest of the finish).
+    """
+    cfg, factor = ctx.config, ctx.factor
+    vx, vy, _ = ctx.pattern.finish_points(factor, cfg)
+    if vx.size < cfg.search.min_finish_points:  # (no edges at full resolution)
+        return [None] * len(todo)
+    H, W = gray.shape
+    pts = [_full_pose(c.fit, ctx.features).map(vx, vy) for c in todo]
+    band_r = int(math.ceil(_full_radius(factor) + cfg.search.band_slack))
+    m = band_r + 4
+    boxes = [(int(max(0, math.floor(mx.min()) - m)), int(max(0, math.floor(my.min()) - m)),
+              int(min(W, math.ceil(mx.max()) + m + 1)), int(min(H, math.ceil(my.max()) + m + 1)))
+             for mx, my in pts]
+    area = lambda b: max(b[2] - b[0], 0) * max(b[3] - b[1], 0)
+    union = (min(b[0] for b in boxes), min(b[1] for b in boxes),
+             max(b[2] for b in boxes), max(b[3] for b in boxes))
+    if sum(area(b) for b in boxes) >= area(union):
+        groups = [(union, list(range(len(todo))))]
+    else:
+        groups = [(b, [i]) for i, b in enumerate(boxes)]
+    out = [None] * len(todo)
+    for box, members in groups:
+        x0, y0, x1, y1 = box
+        if x1 - x0 < 8 or y1 - y0 < 8:
+            continue
+        grad = compute_gradients(np.ascontiguousarray(gray[y0:y1, x0:x1]), 1.0, cfg.equalize)
+        e = edge_points_near(grad, np.concatenate([pts[i][0] for i in members]) - x0,
+                             np.concatenate([pts[i][1] for i in members]) - y0, band_r,
+                             cfg.min_gradient)
+        for i in members:
+            out[i] = (box, e, e.index_map())
+    return out
+
+
+def _full_res(ctx: SearchContext, fit: Fit, gray, where=None) -> Fit:
+    """Refine a working-resolution fit on the full-resolution image."""
+    cfg, p, factor = ctx.config, ctx.pattern, ctx.factor
+    pose = _full_pose(fit, ctx.features)
+    vx, vy, vang = p.finish_points(factor, cfg)
+    tol = math.radians(cfg.angle_tolerance)
+    if factor < 0.999:
+        if where is None:  # (a box too small to hold edges, or no finishing points)
+            return Fit(pose, fit.score, fit.matched, fit.rms, fit.inside)
+        (x0, y0, x1, y1), edges, index = where
+        H, W = gray.shape
+        local = Pose(pose.a, pose.b, pose.tx - x0, pose.ty - y0)
+        f = refine(local, vx, vy, vang, edges, index,
+                   radii=(_full_radius(factor), 1.5) if cfg.refine else (), iterations=3,
+                   angle_tol=tol, either=p.either, fix_scale=ctx.scale_known,
+                   fix_angle=ctx.angle_known, score_radius=cfg.match_radius)
+        q = f.pose
+        # the share inside the image is measured on the whole image, not the crop
+        mx, my = Pose(q.a, q.b, q.tx + x0, q.ty + y0).map(vx, vy)
+        inside = float(np.mean((mx >= 0) & (my >= 0) & (mx <= W - 1) & (my <= H - 1)))
+        return Fit(Pose(q.a, q.b, q.tx + x0, q.ty + y0), f.score, f.matched, f.rms, inside)
+    feats = ctx.features
+    return refine(pose, vx, vy, vang, feats.edges, feats.index,
+                  radii=(1.0,) if cfg.refine else (), angle_tol=tol, either=p.either,
+                  fix_scale=ctx.scale_known, fix_angle=ctx.angle_known,
+                  score_radius=cfg.match_radius)
+
+
+# ------------------------------------------------------------------- ranking
+def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: float) -> list:
+    """Refine the promising candidates at full resolution, rank them by
+    that score, keep the distinct ones and rate their confidence.
+
+    Returns the detections, best first (``[]``: not found).
+    """
+    cmp = ctx.compare
+    best = max((c.work_score for c in cands), default=0.0)
+    pre = max(0.85 * ctx.min_score, 0.6 * best)  # only those that could win
+    todo = [c for c in cands if c.work_score >= pre][: ctx.max_results + 2]
+    wheres = (_full_edges(ctx, gray, todo) if todo and ctx.factor < 0.999
+              else [None] * len(todo))
+    for c, where in zip(todo, wheres):
+        c.full = _full_res(ctx, c.fit, gray, where)
+    # rank by both scores: the working scale's is smoother (less pixel
+    # noise, JPEG, snow), the full resolution's sharper
+    todo.sort(key=lambda c: -(c.full.score + c.work_score))
+    accepted: list[Candidate] = []
+    for c in todo:
+        if len(accepted) >= ctx.max_results:
+            break
+        if c.full.score < ctx.min_score or not cmp.pose_ok(c.full.pose):
+            continue
+        if any(cmp.same(c.full.pose, a.full.pose, 1.0) for a in accepted):
+            continue
+        accepted.append(c)
+    # runner-up: the best candidate that is not (nearly) the same pose as a detection
+    # (for a line: not the same line, found at another point along it)
+    if ctx.pattern.is_line:
+        same = lambda c, a: cmp.same(c.fit.pose, a.fit.pose, ctx.factor)
+    else:
+        same = lambda c, a: cmp.close(c.fit.pose, a.fit.pose) or cmp.equivalent(c.fit.pose, a.fit.pose)
+    others = [c.work_score for c in cands if not any(c is a or same(c, a) for a in accepted)]
+    runner_up = max(others, default=0.0)
+    dets = []
+    for c in accepted:
+        conf = confidence(c.work_score, runner_up)
+        if conf < min_confidence:
+            continue
+        dets.append(to_detection(ctx, c, conf, gray.shape))
+    dets.sort(key=lambda d: -d.score)
+    return dets
+
+
+def to_detection(ctx: SearchContext, c: Candidate, conf: float, shape) -> Detection:
+    """The :class:`Detection` of a finished candidate, with its flags."""
+    p = ctx.pattern
+    pose = c.full.pose
+    x, y, s, a = pose.tx, pose.ty, pose.scale, pose.angle
+    kind, la, lo = "object", None, None
+    if p.is_line:
+        # any point of the line is as good: report the one nearest the centre
+        kind = "line"
+        la, lo, x, y = line_parameters(x, y, a, shape)
+    m = pose_to_matrix(x, y, s, a, p.origin)
+    outline = [apply_matrix(m, o) for o in p.outline]
+    flags = []
+    if c.full.inside < 0.98:
+        flags.append(FLAG_PARTIAL)
+    if conf < 0.2:
+        flags.append(FLAG_AMBIGUOUS)
+    if p.is_line:
+        flags.append(FLAG_ALONG_LINE)
+    if ctx.compare.outside_ranges(s, a):
+        flags.append(FLAG_OUTSIDE_RANGE)
+    return Detection(float(x), float(y), float(s), float(a), float(c.full.score), conf,
+                     m, outline, c.votes, kind, la, lo, tuple(flags))
