@@ -39,8 +39,8 @@ def _warp_error(src: np.ndarray, dst: np.ndarray, matrix: np.ndarray) -> float:
 @pytest.fixture
 def no_shared_data(monkeypatch):
     """Pretend ../shared/data is absent (a user's fresh checkout)."""
-    import seahough.sim.simulate as simulate_module
-    monkeypatch.setattr(simulate_module, "shared_data_dir", lambda: None)
+    import seahough.sim.backgrounds as backgrounds_module
+    monkeypatch.setattr(backgrounds_module, "shared_data_dir", lambda: None)
 
 
 # ----------------------------------------------------------------------------

@@ -1,4 +1,54 @@
-"""The underwater scene simulator: exact ground truth for tests and benchmarks."""
+"""The underwater scene simulator: synthetic photos with exact ground truth.
 
-from .simulate import *  # noqa: F401,F403
-from .simulate import __all__  # noqa: F401
+Tests, benchmarks and the demo use it to make photos in which the answer is
+known exactly: a docking marker pasted at a known pose
+(:func:`marker_scene`), a patch of a photo seen again rotated and rescaled
+(:func:`fragment_scene`), two camera frames related by a known similarity
+motion (:func:`frame_pair`), a rope crossing the frame (:func:`rope_scene`),
+a whole camera path (:func:`sequence`).
+
+Scenes are built from a background (:mod:`.backgrounds`: a real seabed photo
+from the shared data folder when it is there, else a procedural seabed),
+then degraded by water (:mod:`.water`, which describes the image-formation
+model). Markers, pasting and :class:`Truth` live in :mod:`.markers`.
+
+Geometry conventions are those of :mod:`seahough.geometry` (equation 1):
+a 2x3 matrix maps pattern-image (or previous-frame) pixel coordinates to
+scene (current-frame) pixel coordinates, exactly as ``cv2.warpAffine(src, M,
+(w, h))`` takes it; pixel ``(0, 0)`` is the centre of the top-left pixel; x
+right, y down; angles in degrees, positive = counter-clockwise as displayed.
+Everything is deterministic given ``seed`` (``numpy.random.default_rng``).
+
+Examples
+--------
+>>> from seahough import sim
+>>> scene, pattern, truth = sim.marker_scene(shape=(120, 160), seed=1, size=40,
+...                                          source="procedural")
+>>> scene.shape, pattern.shape, truth.corners.shape
+((120, 160, 3), (48, 48), (4, 2))
+"""
+
+from .backgrounds import background, seabed
+from .markers import MARKERS, Truth, marker, paste_pattern, random_pose
+from .scenes import fragment_scene, frame_pair, marker_scene, negative_scene, rope_scene
+from .sequences import sequence
+from .water import PRESETS, Water, apply_water
+
+__all__ = [
+    "MARKERS",
+    "PRESETS",
+    "Water",
+    "Truth",
+    "apply_water",
+    "seabed",
+    "background",
+    "marker",
+    "random_pose",
+    "paste_pattern",
+    "marker_scene",
+    "negative_scene",
+    "fragment_scene",
+    "frame_pair",
+    "rope_scene",
+    "sequence",
+]
