@@ -149,10 +149,10 @@ def odometry_pass(args, tmp: Path) -> None:
 
     probe = Probe(not args.no_tracemalloc)
     marks = _marks(args)
-    advance = odometry._advance
+    advance = odometry.advance
 
-    def advance_and_probe(st, row):    # called once per frame, after its row is written
-        advance(st, row)
+    def advance_and_probe(st, row, tuning):    # called once per frame, after its row is written
+        advance(st, row, tuning)
         i = row["index"] + 1
         if i == args.warmup:
             probe.checkpoint(i)
@@ -160,13 +160,13 @@ def odometry_pass(args, tmp: Path) -> None:
         elif i in marks:
             probe.checkpoint(i)
 
-    odometry._advance = advance_and_probe
+    odometry.advance = advance_and_probe
     t = time.perf_counter()
     try:
         res = odometry.run_odometry(paths, tmp / "odometry", progress=False,
                                     mosaic=not args.no_mosaic)
     finally:
-        odometry._advance = advance
+        odometry.advance = advance
     total_s = time.perf_counter() - t
     probe.checkpoint(args.frames, label="after mosaic and plot" if not args.no_mosaic
                      else "after plot")

@@ -40,7 +40,7 @@ from seahough import sim as S  # noqa: E402
 from seahough._data import shared_data_dir  # noqa: E402
 from seahough.geometry import apply_matrix, invert_matrix  # noqa: E402
 import seahough.motion.odometry as odometry  # noqa: E402
-from seahough.motion.odometry import list_frames, run_odometry  # noqa: E402
+from seahough import list_frames, run_odometry  # noqa: E402
 
 TARGET_MS = 30.0
 

@@ -19,7 +19,8 @@ import pytest
 import seahough
 from seahough import sim as S
 from seahough.geometry import apply_matrix, compose, invert_matrix, matrix_to_pose
-from seahough.motion.odometry import list_frames, read_odometry_csv, run_odometry, time_from_name
+from seahough.io.frames import list_frames, time_from_name
+from seahough.motion import read_odometry_csv, run_odometry
 
 from conftest import DATA, data_path
 
@@ -93,7 +94,7 @@ def _mosaic_placement(mosaic, frames, rows):
     """Is every frame in the mosaic where the trajectory puts it?
 
     The mosaic takes each pixel from the frame that saw it nearest to that
-    frame's centre (odometry._build_mosaic), so each frame has a cell of the
+    frame's centre (seahough.motion.mosaic.build_mosaic), so each frame has a cell of the
     mosaic that should hold its own pixels: the cells are computed from the
     trajectory (the rows' ``matrix``). Frame 0 is located in the mosaic (the
     canvas origin); then each frame is compared with the mosaic over its
@@ -265,7 +266,7 @@ def test_metres_per_pixel_scales_the_track(tmp_path):
         assert "x_m" not in q
     assert res.summary["settings"]["metres_per_pixel"] == mpp
     assert res.summary["path_length_m"] == pytest.approx(px.summary["path_length_px"] * mpp)
-    assert res.summary["unit"] == "m" and px.summary["unit"] == "px"
+    assert px.summary["path_length_m"] is None            # no scale given: pixels only
     # the end point in metres against the truth (the camera moved ~90 px, ~0.33 m)
     xy, _ = _true_track(mats)
     true_end = (xy[-1] - xy[0]) * mpp
@@ -501,15 +502,15 @@ def test_a_long_run_keeps_no_state_per_frame(tmp_path, monkeypatch):
     paths = _write_frames(frames, tmp_path / "loop")
     seq = [paths[i % len(paths)] for i in range(150)]
     counts = {}
-    advance = O._advance
+    advance = O.advance
 
-    def counting(st, row):
-        advance(st, row)
+    def counting(st, row, tuning):
+        advance(st, row, tuning)
         if row["index"] in (49, 149):
             gc.collect()
             counts[row["index"]] = len(gc.get_objects())
 
-    monkeypatch.setattr(O, "_advance", counting)
+    monkeypatch.setattr(O, "advance", counting)
     res = run_odometry(seq, tmp_path / "o", progress=False, mosaic=True)
     # (a row kept per frame was 3 objects: the dict and its two matrix lists)
     assert counts[149] - counts[49] < 30, counts
@@ -542,11 +543,12 @@ def test_resume_gives_the_same_result(tmp_path):
 _KILL_SCRIPT = """
 import sys, time
 import seahough.motion.odometry as O
-raw = O._Reader.raw
+from seahough.io.frames import FrameReader
+raw = FrameReader.raw
 def slow(self, i):
     time.sleep(0.15)
     return raw(self, i)
-O._Reader.raw = slow
+FrameReader.raw = slow
 O.run_odometry(sys.argv[1], sys.argv[2], progress=False, mosaic=False)
 """
 
@@ -779,7 +781,7 @@ def test_tile_look_alikes_are_flagged_not_measured(tmp_path):
     # flagged as low confidence or corrected, not accepted (3 peaks per full
     # search did; later, with 7, a doubtful keyframe look-alike three frames
     # back at confidence 0.24 did, 52 px off, until such measurements were
-    # checked against the last measured frame: odometry._DOUBTFUL)
+    # checked against the last measured frame: OdometryTuning.doubtful)
     bad, compared = _step_disagreements(tmp_path, "subvo_pool_chain")
     assert bad == [] and compared >= 4, (bad, compared)   # (not vacuous: 4 of 11 pairs)
 

@@ -14,11 +14,11 @@ the peak is the vehicle's motion (photo dead reckoning).
 from .config import Config
 from .core.detector import Detection, Detector, SearchResult
 from .errors import (ImageError, ImageReadError, ImageSizeError, ImageValueError,
-                     ParameterError, PatternError, SeahoughError)
-from .geometry import matrix_to_pose, pose_to_matrix, solve_segment_pair
+                     ParameterError, PatternError, SeahoughError, WriteError)
+from .geometry import Similarity, matrix_to_pose, pose_to_matrix, solve_segment_pair
+from .io.frames import list_frames
 from .io.images import read_image, to_gray
-from .motion.pair import Motion, estimate_motion
-from .motion.odometry import OdometryResult, list_frames, run_odometry
+from .motion import Motion, OdometryResult, estimate_motion, run_odometry
 from .core.pattern import Pattern
 
 __version__ = "0.1.0"
@@ -26,7 +26,7 @@ __version__ = "0.1.0"
 __all__ = [
     "Config", "Detection", "Detector", "SearchResult", "Pattern", "Motion", "estimate_motion",
     "run_odometry", "list_frames", "OdometryResult",
-    "pose_to_matrix", "matrix_to_pose", "solve_segment_pair", "read_image", "to_gray",
+    "Similarity", "pose_to_matrix", "matrix_to_pose", "solve_segment_pair", "read_image", "to_gray",
     "SeahoughError", "ImageError", "ImageReadError", "ImageSizeError", "ImageValueError",
-    "ParameterError", "PatternError", "__version__",
+    "ParameterError", "PatternError", "WriteError", "__version__",
 ]

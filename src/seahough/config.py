@@ -254,3 +254,89 @@ class Config:
             if k not in names:
                 raise ParameterError(f"Config has no parameter {k!r}")
         return dataclasses.replace(self, **changes)
+
+
+#: The configuration :func:`~seahough.estimate_motion` uses unless given one:
+#: more pattern points, since a whole frame has far more edges than a marker.
+#: (Fewer candidates, 4 instead of 7, measured as accurate on synthetic pairs
+#: and faster, but on a real Sparus pair one frame apart the true peak was not
+#: among them and a wrong motion came back at confidence 0.17, where 7 declines
+#: the pair.)
+MOTION_CONFIG = Config(n_pattern_points=256, n_verify_points=600, target_size=320)
+
+#: The configuration :func:`~seahough.run_odometry` uses unless given one: the
+#: motion configuration with the pattern-point counts of the default Config
+#: (fewer than estimate_motion's: a keyframe is searched many times, from a
+#: prediction), and its seven accumulator peaks per full search (two in the
+#: small prior window, :attr:`OdometryTuning.prior_candidates`). Three peaks
+#: per full search accepted tile-shifted look-alikes on the tiled pool
+#: sequence (40 px jumps at confidence 0.28-0.32) that seven flag as low
+#: confidence.
+ODOMETRY_CONFIG = MOTION_CONFIG.replace(n_pattern_points=128, n_verify_points=400)
+
+
+@dataclass(frozen=True)
+class OdometryTuning:
+    """The keyframe, prior and fallback policy of :func:`~seahough.run_odometry`.
+
+    Parameters
+    ----------
+    min_confidence : float
+        Below it a pair is not measured (``low_confidence``).
+    min_relative : float
+        ... nor when its edges in view match less than this share as well as
+        in the last measured frames (median of up to 5: a frame of somewhere
+        else, a fish, a cloud of silt).
+    min_score : float
+        Share of the reference frame's edges that must be found again.
+    min_overlap : float
+        Share of the reference frame that must still be in view.
+    rekey_overlap : float
+        The next frame predicted to overlap the keyframe less than this: the
+        current frame becomes the keyframe ...
+    rekey_match : float
+        ... or when the keyframe's edges in view are found less than this
+        share as often as at its first measurement (the scene's look changed).
+    prior_radius : float
+        Half-size of the prior window, share of the frame's longer side ...
+    prior_bins : int
+        ... and at least this many translation bins.
+    prior_angle : float
+        Rotation window around the prediction, +- degrees.
+    prior_scale : float
+        Scale window around the prediction, x/÷ this.
+    prior_candidates : int
+        Accumulator peaks examined in the prior window.
+    full_shift : float
+        Full search: +- this share of the frame around the last position ...
+    max_span : int
+        ... and the ranges widened for at most this many frames of gap.
+    doubtful : float
+        A keyframe measurement less confident than this is checked against
+        the last measured frame (nearer in time) ...
+    agree_px : float
+        ... which replaces it when they differ by more than this many working
+        pixels at the frame's corners (beyond a measurement's noise) and it
+        is more confident.
+
+    Examples
+    --------
+    >>> OdometryTuning().prior_angle
+    4.0
+    """
+
+    min_confidence: float = 0.2
+    min_relative: float = 0.4
+    min_score: float = 0.2
+    min_overlap: float = 0.15
+    rekey_overlap: float = 0.6
+    rekey_match: float = 0.6
+    prior_radius: float = 0.05
+    prior_bins: int = 3
+    prior_angle: float = 4.0
+    prior_scale: float = 1.03
+    prior_candidates: int = 2
+    full_shift: float = 0.5
+    max_span: int = 3
+    doubtful: float = 0.35
+    agree_px: float = 2.0

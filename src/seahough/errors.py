@@ -13,7 +13,8 @@ Hierarchy::
     │   ├── ImageSizeError                      empty, too small, or too large
     │   └── ImageValueError                     wrong shape/dtype, NaN or inf
     ├── PatternError              (ValueError)  the pattern cannot be searched for
-    └── ParameterError            (ValueError)  a parameter is out of range
+    ├── ParameterError            (ValueError)  a parameter is out of range
+    └── WriteError                (OSError)     a file or folder cannot be written
 """
 
 from __future__ import annotations
@@ -47,6 +48,10 @@ class ParameterError(SeahoughError, ValueError):
     """A parameter is out of range or contradicts another one."""
 
 
+class WriteError(SeahoughError, OSError):
+    """A file or folder cannot be written (unwritable folder, a folder in the way...)."""
+
+
 __all__ = [
     "SeahoughError",
     "ImageError",
@@ -55,4 +60,5 @@ __all__ = [
     "ImageValueError",
     "PatternError",
     "ParameterError",
+    "WriteError",
 ]

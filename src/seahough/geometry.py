@@ -188,6 +188,21 @@ def format_angle(degrees: float, decimals: int = 2, period: float = 360.0) -> st
     return f"{r + 0.0:.{decimals}f}"      # + 0.0: never "-0.00"
 
 
+def shift_origin(matrix, ox: float, oy: float) -> np.ndarray:
+    """A 2x3 matrix seen in coordinates whose origin is at ``(ox, oy)``:
+    ``T(-o) M T(o)`` (e.g. a motion measured on crops that start at ``o``
+    is ``shift_origin(m, -ox, -oy)`` in whole-frame pixels).
+
+    >>> shift_origin([[2, 0, 0], [0, 2, 0]], 10, 0)
+    array([[ 2.,  0., 10.],
+           [ 0.,  2.,  0.]])
+    """
+    m = np.asarray(matrix, dtype=float)
+    o = np.array([ox, oy], float)
+    t = m[:, :2] @ o + m[:, 2] - o
+    return np.hstack([m[:, :2], t[:, None]])
+
+
 def overlap(matrix, width: int, height: int, n: int = 24) -> float:
     """Share of a ``width`` x ``height`` frame that ``matrix`` maps inside an
     equally sized frame (sampled on an ``n`` x ``n`` grid).
@@ -253,8 +268,17 @@ class Similarity:
     def from_matrix(cls, matrix) -> "Similarity":
         """The nearest similarity to a 2x3 matrix (averages out rounding asymmetry)."""
         m = np.asarray(matrix, dtype=float)
-        return cls(float(0.5 * (m[0, 0] + m[1, 1])), float(0.5 * (m[0, 1] - m[1, 0])),
+        return cls(float(0.5 * (m[0, 0] + m[1, 1])), float(-0.5 * (m[1, 0] - m[0, 1])),
                    float(m[0, 2]), float(m[1, 2]))
+
+    @classmethod
+    def from_columns(cls, matrix) -> "Similarity":
+        """The similarity whose first column is the 2x3 ``matrix``'s
+        (``a = m[0, 0]``, ``b = -m[1, 0]``) and whose translation is its
+        last: exact for a matrix that already is a similarity, where
+        :meth:`from_matrix` would average away rounding."""
+        m = np.asarray(matrix, dtype=float)
+        return cls(float(m[0, 0]), float(-m[1, 0]), float(m[0, 2]), float(m[1, 2]))
 
     # ------------------------------------------------------------------ reading
     @property
@@ -323,5 +347,16 @@ class Similarity:
     def shifted(self, ox: float, oy: float) -> "Similarity":
         """The same transform in coordinates whose origin is at ``(ox, oy)``:
         ``T(-o) S T(o)`` (e.g. a motion measured on crops of a frame)."""
-        x, y = self.map(ox, oy)
-        return Similarity(self.a, self.b, float(x) - ox, float(y) - oy)
+        return Similarity.from_columns(shift_origin(self.matrix, ox, oy))
+
+
+def frame_centre(shape) -> np.ndarray:
+    """``(x, y)`` of the centre of an image of ``shape`` (height, width, ...):
+    ``((w - 1) / 2, (h - 1) / 2)``, as pixel (0, 0) is the centre of the
+    top-left pixel.
+
+    >>> frame_centre((480, 640)).tolist()
+    [319.5, 239.5]
+    """
+    h, w = shape[:2]
+    return np.array([(w - 1) / 2.0, (h - 1) / 2.0])

@@ -1,6 +1,16 @@
-"""Photo motion: one frame pair (:mod:`.pair`) and whole dives (:mod:`.odometry`)."""
+"""Photo motion: one frame pair, and whole dives.
 
-from .pair import MOTION_CONFIG, Motion, estimate_motion
-from .odometry import OdometryResult, run_odometry
+- :mod:`.pair`: :func:`estimate_motion`, the one way to measure a pair
+- :mod:`.odometry`: :func:`run_odometry`, the keyframe / prior / fallback policy
+- :mod:`.state`: what the next frame needs (rebuilt from the rows on resume)
+- :mod:`.track`: the CSV rows, the summary, :class:`OdometryResult`
+- :mod:`.mosaic`: frames placed by the trajectory
+"""
 
-__all__ = ["MOTION_CONFIG", "Motion", "estimate_motion", "OdometryResult", "run_odometry"]
+from ..config import MOTION_CONFIG, ODOMETRY_CONFIG, OdometryTuning
+from .odometry import run_odometry
+from .pair import Motion, estimate_motion
+from .track import OdometryResult, read_odometry_csv
+
+__all__ = ["MOTION_CONFIG", "ODOMETRY_CONFIG", "OdometryTuning", "Motion", "estimate_motion",
+           "OdometryResult", "read_odometry_csv", "run_odometry"]

@@ -2,16 +2,20 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..config import Config
+from ..config import MOTION_CONFIG, Config
 from ..core.detector import Detector
+from ..core.features import Features, extract_features
+from ..core.pattern import Pattern
+from ..core.preprocess import choose_factor
 from ..errors import ParameterError, PatternError
+from ..geometry import frame_centre, overlap, shift_origin, wrap_angle
 from .._validate import number
 from ..io.images import MIN_SIDE, to_gray
-from ..core.pattern import Pattern
 
 
 @dataclass
@@ -47,17 +51,10 @@ class Motion:
     overlap: float
 
     def to_dict(self) -> dict:
+        """Plain-Python form for JSON."""
         return {"matrix": np.asarray(self.matrix).tolist(), "dx": self.dx, "dy": self.dy,
                 "angle": self.angle, "scale": self.scale, "confidence": self.confidence,
                 "score": self.score, "overlap": self.overlap}
-
-
-#: The configuration estimate_motion uses unless given one: more pattern points,
-#: since a whole frame has far more edges than a marker. (Fewer candidates, 4
-#: instead of 7, measured as accurate on synthetic pairs and faster, but on a
-#: real Sparus pair one frame apart the true peak was not among them and a
-#: wrong motion came back at confidence 0.17, where 7 declines the pair.)
-MOTION_CONFIG = Config(n_pattern_points=256, n_verify_points=600, target_size=320)
 
 
 def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30.0, 30.0), *,
@@ -100,18 +97,48 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
                             min_score=min_score, config=cfg)
     if m is None or (x0, y0) == (0, 0):
         return m
-    full = _uncrop(m.matrix, x0, y0)
+    full = shift_origin(m.matrix, -x0, -y0)
     h, w = prev.shape
-    c = np.array([(w - 1) / 2.0, (h - 1) / 2.0])
+    c = frame_centre(prev.shape)
     dx, dy = full[:, :2] @ c + full[:, 2] - c
     return Motion(full, float(dx), float(dy), m.angle, m.scale, m.confidence, m.score,
-                  _overlap(full, w, h))
+                  overlap(full, w, h))
+
+
+def frame_factor(shape, config: Config, scale_range) -> float:
+    """The working scale of a frame searched for in a frame of ``shape``
+    (the rule :meth:`Detector.search` applies to a whole-frame pattern)."""
+    h, w = shape[:2]
+    return choose_factor(shape, config, math.hypot(w, h), min(scale_range[0], 1.0))
+
+
+def frame_features(gray: np.ndarray, config: Config, scale_range) -> Features:
+    """A frame's features at :func:`frame_factor`'s working scale, to be
+    searched many times (against a keyframe, then the previous frame)."""
+    return extract_features(gray, frame_factor(gray.shape, config, scale_range), config)
+
+
+def search_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, region, *,
+                min_score: float, config: Config, features: Features | None = None):
+    """The search that measures a pair: the previous frame (``pattern``) in the
+    current one (``gray``, a checked grey image as :func:`~seahough.to_gray`
+    gives), its centre within ``region`` (x0, y0, x1, y1; current-frame
+    pixels). Returns the best :class:`~seahough.Detection` (its confidence not
+    yet judged) or None. :func:`motion_from_pattern` and the dead reckoning
+    both measure pairs with it."""
+    det = Detector(pattern, scale_range, angle_range, config=config, max_results=1,
+                   min_score=min_score, min_confidence=0.0, search_region=region)
+    res = det.search(gray, features=features)
+    return res.detections[0] if res.detections else None
 
 
 def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
                         angle_range=(-30.0, 30.0), *, max_shift=0.5, min_confidence=0.15,
-                        min_score=0.15, config: Config | None = None, features=None):
-    """:func:`estimate_motion` with the previous frame already made a pattern."""
+                        min_score=0.15, config: Config | None = None,
+                        features: Features | None = None) -> Motion | None:
+    """:func:`estimate_motion` with the previous frame already made a pattern
+    (:meth:`Pattern.from_frame`, origin at its centre); ``features`` may give
+    the current frame's (:func:`frame_features`)."""
     cfg = config or MOTION_CONFIG
     _check_thresholds(max_shift, min_confidence, min_score)
     cur = to_gray(current, name="current frame", max_pixels=cfg.max_pixels)
@@ -121,18 +148,13 @@ def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
         raise ParameterError(f"frames differ in size: previous {pw}x{ph}, current {w}x{h}")
     ox, oy = pattern.origin
     region = (ox - max_shift * w, oy - max_shift * h, ox + max_shift * w, oy + max_shift * h)
-    det = Detector(pattern, scale_range, angle_range, config=cfg, max_results=1,
-                   min_score=min_score, min_confidence=0.0, search_region=region)
-    res = det.search(cur, features=features)
-    if not res.detections:
-        return None
-    d = res.detections[0]
-    if d.confidence < min_confidence:
+    d = search_pair(pattern, cur, scale_range, angle_range, region, min_score=min_score,
+                    config=cfg, features=features)
+    if d is None or d.confidence < min_confidence:
         return None
     m = d.matrix
-    overlap = _overlap(m, w, h)
-    angle = (d.angle + 180.0) % 360.0 - 180.0
-    return Motion(m, d.x - ox, d.y - oy, angle, d.scale, d.confidence, d.score, overlap)
+    return Motion(m, d.x - ox, d.y - oy, wrap_angle(d.angle, low=-180.0), d.scale,
+                  d.confidence, d.score, overlap(m, w, h))
 
 
 def _check_thresholds(max_shift, min_confidence, min_score) -> None:
@@ -169,18 +191,3 @@ def content_box(gray: np.ndarray, margin: int = 2) -> tuple[int, int, int, int]:
     if box[2] - box[0] < small[0] or box[3] - box[1] < small[1]:
         return (0, 0, w, h)  # (also frames too small to lose a margin)
     return box
-
-
-def _uncrop(m, x0: float, y0: float) -> np.ndarray:
-    """A motion measured on crops starting at (x0, y0), in full-frame pixels."""
-    m = np.asarray(m, float)
-    o = np.array([x0, y0], float)
-    t = m[:, :2] @ (-o) + m[:, 2] + o
-    return np.hstack([m[:, :2], t[:, None]])
-
-
-def _overlap(m, w, h, n=24) -> float:
-    """Share of the previous frame that lands inside the current one."""
-    xs, ys = np.meshgrid(np.linspace(0, w - 1, n), np.linspace(0, h - 1, n))
-    p = np.stack([xs.ravel(), ys.ravel()], 1) @ np.asarray(m)[:, :2].T + np.asarray(m)[:, 2]
-    return float(np.mean((p[:, 0] >= 0) & (p[:, 1] >= 0) & (p[:, 0] <= w - 1) & (p[:, 1] <= h - 1)))

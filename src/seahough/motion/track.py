@@ -1,0 +1,290 @@
+"""A dead-reckoning track on disk: ``odometry.csv`` rows, the run's summary
+counts, and what :func:`~seahough.run_odometry` returns.
+
+Rows are written to the CSV as each frame is finished and read back one at
+a time, so that a survey's length never sets the memory it needs.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+
+from .._validate import number
+from ..errors import ParameterError
+from ..geometry import angle_difference, apply_matrix, frame_centre, invert_matrix, matrix_to_pose
+
+__all__ = ["OdometryResult", "read_odometry_csv", "iter_odometry_csv", "CSV_BASE", "CSV_METRIC",
+           "CSV_MORE"]
+
+CSV_BASE = ["index", "file", "time", "x", "y", "heading", "scale", "confidence", "flags"]
+CSV_METRIC = ["x_m", "y_m"]
+CSV_MORE = ["dx", "dy", "rotation", "scale_change", "score", "overlap", "ref", "method",
+             "status", "ms", "matrix", "pair_matrix"]
+
+
+class OdometryResult:
+    """What :func:`~seahough.run_odometry` produced.
+
+    Attributes
+    ----------
+    rows : list of dict
+        One per frame, the CSV's columns with Python values (None = empty):
+        ``index, file, time, x, y, heading, scale, confidence, flags``
+        (``x_m, y_m`` when metric), and ``dx, dy, rotation, scale_change``
+        (motion from the previous frame: shift of its centre in current-frame
+        pixels, degrees counter-clockwise as displayed, size change),
+        ``score, overlap`` (of the measurement), ``ref`` (index of the frame
+        it was measured against), ``method`` (``"prior"``, ``"full"``,
+        ``"previous"``: see :func:`run_odometry`'s notes), ``status``
+        (``"origin"``, ``"measured"``, ``"assumed"``, ``"unreadable"``),
+        ``ms``, ``matrix`` and
+        ``pair_matrix`` (2x3 as 6 floats, row-major). The run does not keep
+        the rows in memory (a survey of 100,000 photos would hold about
+        250 MB of them): they are read from ``csv_path`` by
+        :func:`read_odometry_csv` when first asked for, then kept.
+    summary : dict
+        The content of ``summary.json``.
+    csv_path, json_path : Path
+    mosaic_path, trajectory_path : Path or None
+    """
+
+    def __init__(self, rows, summary, csv_path, json_path, mosaic_path=None,
+                 trajectory_path=None):
+        self._rows = None if rows is None else list(rows)
+        self.summary = summary
+        self.csv_path = Path(csv_path)
+        self.json_path = Path(json_path)
+        self.mosaic_path = mosaic_path
+        self.trajectory_path = trajectory_path
+
+    @property
+    def rows(self) -> list:
+        if self._rows is None:
+            self._rows = read_odometry_csv(self.csv_path)
+        return self._rows
+
+    def iter_rows(self):
+        """The rows one at a time, from the CSV unless already loaded (for
+        runs too long to hold every row)."""
+        return iter(self._rows) if self._rows is not None else iter_odometry_csv(self.csv_path)
+
+    def __repr__(self):
+        return (f"OdometryResult(frames={self.summary.get('frames')}, csv_path={self.csv_path!r}, "
+                f"mosaic_path={self.mosaic_path!r}, trajectory_path={self.trajectory_path!r})")
+
+
+def matrix_text(m) -> str:
+    """A 2x3 matrix as the CSV writes it: 6 numbers, row-major, exact (repr).
+
+    >>> parse_matrix(matrix_text([[1, 0, 2.5], [0, 1, -1]])).tolist()
+    [[1.0, 0.0, 2.5], [0.0, 1.0, -1.0]]
+    """
+    return " ".join(repr(float(v)) for v in np.asarray(m, float).ravel())
+
+
+def parse_matrix(s) -> np.ndarray | None:
+    """The 2x3 matrix of a CSV cell (None for an empty one); ValueError otherwise."""
+    if s is None or s == "":
+        return None
+    v = [float(t) for t in str(s).split()]
+    if len(v) != 6:
+        raise ValueError(f"expected 6 numbers, got {len(v)}")
+    return np.array(v, float).reshape(2, 3)
+
+
+def _fmt(v, digits=None) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        if not math.isfinite(v):
+            return ""
+        v = float(v)        # a numpy float's repr is "np.float64(...)"
+        return repr(v) if digits is None else f"{v:.{digits}f}"
+    return str(v)
+
+
+def row_to_csv(row: dict, columns) -> dict:
+    out = {}
+    for k in columns:
+        v = row.get(k)
+        if k in ("matrix", "pair_matrix"):
+            out[k] = "" if v is None else matrix_text(np.asarray(v).reshape(2, 3))
+        elif k in ("x", "y", "x_m", "y_m", "heading", "scale", "dx", "dy", "rotation",
+                   "scale_change", "confidence", "score", "overlap", "time"):
+            out[k] = _fmt(v)
+        elif k == "ms":
+            out[k] = _fmt(v, 2)
+        else:
+            out[k] = _fmt(v)
+    return out
+
+
+_FLOAT_COLS = ("time", "x", "y", "x_m", "y_m", "heading", "scale", "confidence", "dx", "dy",
+               "rotation", "scale_change", "score", "overlap", "ms")
+
+
+def read_odometry_csv(path) -> list:
+    """Rows of an ``odometry.csv`` with Python values (as :attr:`OdometryResult.rows`).
+
+    A last line cut short (the run was killed while writing it) is dropped.
+    """
+    return list(iter_odometry_csv(path))
+
+
+def iter_odometry_csv(path):
+    """The rows of :func:`read_odometry_csv` one at a time (the file is not read whole)."""
+    with open(path, newline="") as f:
+        def complete_lines():
+            for line in f:
+                if not line.endswith("\n"):
+                    return          # the last row was cut short
+                yield line
+
+        for rec in csv.DictReader(complete_lines()):
+            try:
+                row = {"index": int(rec["index"]), "file": rec["file"]}
+                for k in _FLOAT_COLS:
+                    if k in rec:
+                        row[k] = float(rec[k]) if rec[k] not in ("", None) else None
+                row["flags"] = rec.get("flags") or ""
+                row["ref"] = int(rec["ref"]) if rec.get("ref") else None
+                row["method"] = rec.get("method") or ""
+                row["status"] = rec["status"]
+                if row["status"] not in ("origin", "measured", "assumed", "unreadable"):
+                    raise ValueError(row["status"])
+                m = parse_matrix(rec.get("matrix"))
+                row["matrix"] = None if m is None else m.ravel().tolist()
+                pm = parse_matrix(rec.get("pair_matrix"))
+                row["pair_matrix"] = None if pm is None else pm.ravel().tolist()
+                if row["status"] != "unreadable" and m is None:
+                    raise ValueError("no matrix")
+            except (KeyError, ValueError, TypeError, AttributeError):
+                return  # a truncated or foreign line: stop here
+            yield row
+
+
+def closing_enumerate(gen):
+    """enumerate(gen), closing the generator (its file) however the loop ends."""
+    try:
+        yield from enumerate(gen)
+    finally:
+        gen.close()
+
+
+def pose_fields(cum, shape, heading_prev):
+    """x, y, heading (unwrapped near ``heading_prev``), scale of a cumulative matrix."""
+    inv = invert_matrix(cum)
+    x, y = apply_matrix(inv, [frame_centre(shape)])[0]
+    up = inv[:, :2] @ np.array([0.0, -1.0])
+    hd = math.degrees(math.atan2(-up[0], -up[1]))
+    hd = heading_prev + angle_difference(hd, heading_prev)
+    _, _, s, _ = matrix_to_pose(cum)
+    return float(x), float(y), float(hd), float(s)
+
+
+def metric_position(row, shape, mpp):
+    """(x_m, y_m): metres from the first frame's centre."""
+    if row.get("x") is None or shape is None:
+        return None, None
+    c = frame_centre(shape)
+    return float((row["x"] - c[0]) * mpp), float((row["y"] - c[1]) * mpp)
+
+
+class Totals:
+    """The summary's counts, updated row by row (the rows themselves are not kept)."""
+
+    def __init__(self):
+        self.frames = self.measured = self.flagged = self.unreadable = self.assumed = 0
+        self.methods: dict = {}
+        self.refs: set = set()
+        self.length = 0.0
+        self.last_xy = None
+        self.end = None
+        self.ms_sum, self.ms_n = 0.0, 0
+
+    def add(self, r):
+        self.frames += 1
+        self.measured += r["status"] == "measured"
+        self.flagged += bool(r.get("flags"))
+        self.unreadable += r["status"] == "unreadable"
+        self.assumed += r["status"] == "assumed"
+        if r.get("method"):
+            self.methods[r["method"]] = self.methods.get(r["method"], 0) + 1
+        if r.get("ref") is not None:
+            self.refs.add(r["ref"])
+        if r.get("x") is not None:
+            if self.last_xy is not None:
+                self.length += math.hypot(r["x"] - self.last_xy[0], r["y"] - self.last_xy[1])
+            self.last_xy = (r["x"], r["y"])
+            self.end = {"index": r["index"], "x": r["x"], "y": r["y"],
+                        "heading": r["heading"], "scale": r["scale"], "x_m": r.get("x_m"),
+                        "y_m": r.get("y_m")}
+        if r.get("ms") is not None:
+            self.ms_sum += r["ms"]
+            self.ms_n += 1
+
+
+def plot_track(csv_path, path: Path, metric: bool):
+    """The trajectory picture; only the columns drawn are read back from the CSV."""
+    from ..viz import plot_trajectory
+
+    kx, ky = ("x_m", "y_m") if metric else ("x", "y")
+    plot_rows = [{"x": r.get(kx), "y": r.get(ky), "heading": r.get("heading"),
+                  "flags": r.get("flags")} for r in iter_odometry_csv(csv_path)]
+    plot_trajectory(plot_rows, path, unit="m" if metric else "px")
+    return path
+
+
+def resolve_metres_per_pixel(metres_per_pixel, altitude, focal_px):
+    def pos(name, v):
+        return number(name, v, lo=0.0, lo_open=True)
+
+    if metres_per_pixel is not None:
+        if altitude is not None or focal_px is not None:
+            given = ", ".join(n for n, v in (("altitude", altitude), ("focal_px", focal_px))
+                              if v is not None)
+            raise ParameterError(f"give metres_per_pixel, or altitude with focal_px, not both "
+                                 f"(got metres_per_pixel={metres_per_pixel!r} and {given})")
+        return pos("metres_per_pixel", metres_per_pixel)
+    if altitude is None and focal_px is None:
+        return None
+    if altitude is None or focal_px is None:
+        raise ParameterError("altitude and focal_px go together (metres per pixel = "
+                             "altitude / focal_px for a down-looking camera)")
+    return pos("altitude", altitude) / pos("focal_px", focal_px)
+
+
+def summarise(t: Totals, items, mpp, scale_range, angle_range, cfg, tuning, n_resumed, wall_s,
+             metres_per_pixel, altitude, focal_px) -> dict:
+    length = t.length
+    mean_ms = t.ms_sum / t.ms_n if t.ms_n else None
+    src = items[0] if len(items) and not isinstance(items[0], np.ndarray) else "arrays"
+    s = {
+        "frames": t.frames,
+        "measured_pairs": t.measured,
+        "flagged_pairs": t.flagged,
+        "unreadable_frames": t.unreadable,
+        "assumed_poses": t.assumed,
+        "methods": dict(t.methods),
+        "keyframes": len(t.refs),
+        "path_length_px": length,
+        "path_length_m": length * mpp if mpp else None,
+        "end_point": t.end,
+        "mean_ms_per_frame": mean_ms,
+        "resumed_rows": n_resumed,
+        "wall_s": wall_s,
+        "settings": {
+            "source": str(src) if not isinstance(src, str) else src,
+            "metres_per_pixel": mpp, "given_metres_per_pixel": metres_per_pixel,
+            "altitude": altitude, "focal_px": focal_px,
+            "scale_range": list(scale_range), "angle_range": list(angle_range),
+            "tuning": asdict(tuning),
+            "config": asdict(cfg),
+        },
+    }
+    return s
