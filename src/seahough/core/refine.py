@@ -15,36 +15,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import kernels as K
-from ..geometry import wrap360
+from ..geometry import Similarity
 from .keypoints import EdgePoints
 
 
-@dataclass
-class Pose:
-    """Equation 1 as ``x'' = tx + a x' + b y'``, ``y'' = ty - b x' + a y'``."""
-
-    a: float
-    b: float
-    tx: float
-    ty: float
-
-    @property
-    def scale(self) -> float:
-        return math.hypot(self.a, self.b)
-
-    @property
-    def angle(self) -> float:
-        """Degrees in [0, 360)."""
-        return wrap360(math.degrees(math.atan2(self.b, self.a)))
-
-    @classmethod
-    def from_params(cls, tx, ty, scale, angle_rad) -> "Pose":
-        return cls(scale * math.cos(angle_rad), scale * math.sin(angle_rad), tx, ty)
-
-    def map(self, x, y):
-        x = np.asarray(x, float)
-        y = np.asarray(y, float)
-        return self.tx + self.a * x + self.b * y, self.ty - self.b * x + self.a * y
+#: A pose is a similarity: equation 1 as ``x'' = tx + a x' + b y'``,
+#: ``y'' = ty - b x' + a y'`` (see :class:`seahough.geometry.Similarity`).
+Pose = Similarity
 
 
 @dataclass
