@@ -10,6 +10,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -17,7 +18,7 @@ import numpy as np
 from . import kernels as K
 from ..config import Config
 from .._validate import number
-from ..errors import ParameterError, PatternError
+from ..errors import ImageReadError, ParameterError, PatternError, WriteError
 from .features import extract_features
 from ..io.images import to_gray
 from .keypoints import edge_points_near
@@ -432,6 +433,70 @@ class Pattern:
             f32(x[vote_ids]), f32(y[vote_ids]), f32(seg.angle[vote_ids]), w,
             f32(x2[vote_ids]),
             f32(y2[vote_ids]), f32(x[verify_ids]), f32(y[verify_ids]), f32(seg.angle[verify_ids]))
+
+    # ------------------------------------------------------------------ files
+    #: Version of the file format written by :meth:`save`.
+    FILE_VERSION = 1
+
+    def save(self, path) -> Path:
+        """Write the pattern to ``path`` (a ``.npz`` file; numpy arrays and
+        plain values, no pickled code), to be read by :meth:`load` and
+        searched again without its source image: prepare a model once, use
+        it on other machines or in later runs.
+
+        Examples
+        --------
+        >>> import tempfile, os
+        >>> p = Pattern.circle(20, inner_radius=12)
+        >>> with tempfile.TemporaryDirectory() as d:
+        ...     q = Pattern.load(p.save(os.path.join(d, "ring.npz")))
+        >>> q.kind, q.origin == p.origin, bool((q.image == p.image).all())
+        ('ring', True, True)
+        """
+        path = Path(path)
+        if path.suffix != ".npz":
+            path = path.with_name(path.name + ".npz")
+        arrays = {"version": np.array(self.FILE_VERSION), "gray": self._gray,
+                  "origin": np.array(self.origin, float), "polarity": np.array(self.polarity),
+                  "kind": np.array(self.kind), "closed": np.array(bool(self.closed)),
+                  "n_outline": np.array(len(self.outline))}
+        for i, o in enumerate(self.outline):
+            arrays[f"outline_{i}"] = o
+        if self.mask is not None:
+            arrays["mask"] = self.mask
+        if self._edge_mask is not None:
+            arrays["edge_mask"] = self._edge_mask
+        if self.is_line:
+            arrays["line"] = np.array([self.line_length, self.line_width], float)
+        try:
+            with open(path, "wb") as f:
+                np.savez_compressed(f, **arrays)
+        except OSError as e:
+            raise WriteError(f"{path}: cannot write the pattern ({e.strerror or e})") from None
+        return path
+
+    @classmethod
+    def load(cls, path) -> "Pattern":
+        """A pattern written by :meth:`save` (see there)."""
+        path = Path(path)
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                data = {k: z[k] for k in z.files}
+        except FileNotFoundError:
+            raise ImageReadError(f"{path}: no such file") from None
+        except (OSError, ValueError, EOFError) as e:
+            raise PatternError(f"{path}: not a saved seahough pattern ({e})") from None
+        need = {"version", "gray", "origin", "polarity", "kind", "closed", "n_outline"}
+        if not need <= set(data) or int(data["version"]) != cls.FILE_VERSION:
+            raise PatternError(f"{path}: not a saved seahough pattern (version "
+                               f"{cls.FILE_VERSION} expected)")
+        outline = [data[f"outline_{i}"] for i in range(int(data["n_outline"]))]
+        p = cls(data["gray"], data.get("mask"), tuple(data["origin"]),
+                polarity=str(data["polarity"]), kind=str(data["kind"]), outline=outline,
+                closed=bool(data["closed"]), edge_mask=data.get("edge_mask"))
+        if "line" in data:
+            p.line_length, p.line_width = (float(v) for v in data["line"])
+        return p
 
     def __repr__(self) -> str:
         h, w = self.image.shape
