@@ -1,4 +1,4 @@
-"""seahough.viz.plot: every picture is a PNG of a fixed size that shows something."""
+"""seahough.viz: every picture is a PNG of a fixed size that shows something."""
 
 from __future__ import annotations
 
@@ -10,7 +10,10 @@ import numpy as np
 import pytest
 
 import seahough
-from seahough.viz import plot
+from seahough import viz as plot
+from seahough.viz._figure import COLOURS, TRUTH_COLOUR
+from seahough.viz.accumulator import _VOTES, _display_angles
+from seahough.viz.detections import _det_label
 from seahough import sim as sim
 
 
@@ -55,7 +58,7 @@ def test_plot_detections_object(tmp_path, box_search):
     im = read_png(tmp_path / "det.png")
     assert (im.shape[1], im.shape[0]) == plot.detections_size(img.shape) == (1000, 775)
     assert tuple(fig.get_size_inches() * fig.dpi) == (1000, 775)
-    assert count_colour(im, plot.COLOURS[0]) > 300          # the outline is drawn
+    assert count_colour(im, COLOURS[0]) > 300               # the outline is drawn
 
 
 def test_plot_detections_empty_and_colour(tmp_path):
@@ -99,7 +102,7 @@ def test_plot_accumulator_known_scale_and_wrapped_angles(tmp_path, box_search):
     plot.plot_accumulator(res.planes, res.detections, tmp_path / "acc.png")
     assert read_png(tmp_path / "acc.png").shape[:2] == (560, 1300)
     # rotation bins around 0 are shown as -40..40, not 320..40
-    a = plot._display_angles(res.planes.angles)
+    a = _display_angles(res.planes.angles)
     assert np.all(np.diff(a) > 0) and a[0] < 0 < a[-1]
 
 
@@ -155,12 +158,12 @@ def _planes(n_angles=64, scales=(0.8, 0.9, 1.0, 1.1, 1.25), a0=0.0, span=360.0):
 def test_det_label_wraps_rounded_angles():
     obj = types.SimpleNamespace(kind="object", score=0.9, confidence=0.8, scale=1.0,
                                 angle=359.98)
-    assert plot._det_label(obj).endswith(" · 0.0°"), plot._det_label(obj)
+    assert _det_label(obj).endswith(" · 0.0°"), _det_label(obj)
     obj.angle = 359.94
-    assert plot._det_label(obj).endswith(" · 359.9°")
+    assert _det_label(obj).endswith(" · 359.9°")
     line = types.SimpleNamespace(kind="line", score=0.9, confidence=0.8, scale=1.0, angle=0.0,
                                  line_angle=179.97, line_offset=2.0)
-    assert " · line 0.0° · " in plot._det_label(line), plot._det_label(line)
+    assert " · line 0.0° · " in _det_label(line), _det_label(line)
 
 
 def test_scale_angle_marker_sits_on_the_cell_it_refers_to():
@@ -239,8 +242,8 @@ def test_vote_colour_bars_say_that_heights_can_exceed_one(box_search):
     assert res.planes.xy.max() > 1.0            # why the old "1.0 = one vote..." misled
     fig = plot.plot_accumulator(res.planes, res.detections)
     labels = [a.get_ylabel() for a in fig.axes if "vote" in a.get_ylabel()]
-    assert len(labels) == 2 and all(lab == plot._VOTES for lab in labels)
-    assert "exceed 1" in plot._VOTES and "1.0 = one vote" not in plot._VOTES
+    assert len(labels) == 2 and all(lab == _VOTES for lab in labels)
+    assert "exceed 1" in _VOTES and "1.0 = one vote" not in _VOTES
     assert "not a\n    detection's ``score``" in plot.plot_accumulator.__doc__
 
 
@@ -334,7 +337,7 @@ def test_trajectory_truth_and_estimate_both_show(tmp_path):
     ax = fig.axes[0]
     pts = ax.transData.transform(xy)                  # display px, y up
     pts[:, 1] = im.shape[0] - pts[:, 1]               # image rows, y down
-    truth_rgb = np.array([int(plot.TRUTH_COLOUR[i:i + 2], 16) for i in (5, 3, 1)])
+    truth_rgb = np.array([int(TRUTH_COLOUR[i:i + 2], 16) for i in (5, 3, 1)])
     blue = np.array([0xbf, 0x5f, 0x1f])
     n_band = n_line = 0
     for a, b in zip(pts[:-1], pts[1:]):

@@ -1,4 +1,34 @@
-"""Pictures of results: they draw what they are given and never run the pipeline."""
+"""Pictures of what seahough found, and of how it got there.
 
-from .plot import *  # noqa: F401,F403
-from .plot import __all__  # noqa: F401
+They draw what they are given and never run the pipeline. Every function
+draws on a fresh :class:`matplotlib.figure.Figure` made without
+:mod:`matplotlib.pyplot` (so no GUI backend is needed and no global figure
+state is left behind; PNGs are rendered by Agg), saves it as a PNG when
+given ``path`` and returns the figure. The PNG sizes are fixed (see each
+function) so that pictures line up in reports and tests.
+
+- :mod:`.detections`: :func:`plot_detections` (the image, what was found)
+  and :func:`detections_size`;
+- :mod:`.accumulator`: :func:`plot_accumulator` (the accumulator's planes)
+  and :func:`scale_angle_marker`;
+- :mod:`.edges`: :func:`plot_edges` (edge points, key points, segments);
+- :mod:`.trajectory`: :func:`plot_trajectory` (a dead-reckoned path) and
+  :func:`save_mosaic`.
+
+Examples
+--------
+>>> import numpy as np
+>>> from seahough import viz
+>>> fig = viz.plot_detections(np.zeros((48, 64), np.uint8), [])
+>>> tuple(int(v) for v in fig.get_size_inches() * fig.dpi)
+(1000, 775)
+"""
+
+from ._figure import DPI
+from .accumulator import plot_accumulator, scale_angle_marker
+from .detections import detections_size, plot_detections
+from .edges import plot_edges
+from .trajectory import plot_trajectory, save_mosaic
+
+__all__ = ["plot_detections", "plot_accumulator", "plot_edges", "plot_trajectory",
+           "save_mosaic", "detections_size", "scale_angle_marker", "DPI"]

@@ -1,0 +1,417 @@
+"""The picture of what a search found: the image with each detection's
+outline, origin and label, the list of labels or a "not found" note, and
+the pattern, laid out so that nothing covers the image's axes."""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.offsetbox import AnchoredOffsetbox, TextArea, VPacker
+
+from ..geometry import format_angle
+from ._figure import COLOURS, DPI, _OUTLINE, _TEXT_OUTLINE, _as_display, _figure, _finish, \
+    _show, _text_size
+
+_IMAGE_BOX = 900        # longer side of an image drawn by plot_detections, px
+_MARGINS = (75, 25, 45, 55)   # left, right, bottom, top margins around it, px
+_MIN_WIDTH = 560
+#: Smallest height of the image box: a strip shorter than this when drawn
+#: (e.g. 900 x 60) has its notes (list, "not found", pattern) below it.
+_MIN_BOX_HEIGHT = 240
+_UNDER_AXIS = 48        # px below a drawn image taken by its x ticks and label
+
+
+def detections_size(shape) -> tuple[int, int]:
+    """PNG size ``(width, height)`` in px that :func:`plot_detections` makes
+    for an image of ``shape`` (height, width, ...).
+
+    The image is drawn 900 px on its longer side, plus margins for the axes
+    and title (75 + 25 px across, 45 + 55 px down), at least 560 px wide and
+    with at least 240 px for the image and what goes under a short strip.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        The image's ``(height, width)`` or ``(height, width, channels)``.
+
+    Returns
+    -------
+    (int, int)
+        Width and height of the PNG in px.
+
+    Examples
+    --------
+    >>> from seahough.viz import detections_size
+    >>> detections_size((480, 640)), detections_size((60, 900)), detections_size((400, 40))
+    ((1000, 775), (1000, 340), (560, 1000))
+    """
+    h, w = int(shape[0]), int(shape[1])
+    s = _IMAGE_BOX / max(h, w)
+    iw, ih = max(1, round(w * s)), max(1, round(h * s))
+    left, right, bottom, top = _MARGINS
+    return max(_MIN_WIDTH, iw + left + right), max(ih, _MIN_BOX_HEIGHT) + bottom + top
+
+
+def _line_ends(x, y, angle_deg, w, h):
+    """The two ends of the line through (x, y) at ``angle_deg`` (counter-
+    clockwise as displayed) clipped to the image, or None when it misses."""
+    t = math.radians(angle_deg)
+    d = np.array([math.cos(t), -math.sin(t)])
+    L = 2.0 * math.hypot(w, h) + abs(x) + abs(y)
+    p1 = (int(round((x - L * d[0]) * 64)), int(round((y - L * d[1]) * 64)))
+    p2 = (int(round((x + L * d[0]) * 64)), int(round((y + L * d[1]) * 64)))
+    ok, a, b = cv2.clipLine((0, 0, int(w * 64), int(h * 64)), p1, p2)
+    if not ok:
+        return None
+    return (a[0] / 64 - 0.5, a[1] / 64 - 0.5), (b[0] / 64 - 0.5, b[1] / 64 - 0.5)
+
+
+def _det_label(d) -> str:
+    """``"score 0.87 · conf 0.64 · s 1.23 · 45.0°"`` (angles wrapped after
+    rounding: 359.98 is written 0.0)."""
+    if d.kind == "line" and d.line_angle is not None:
+        return (f"score {d.score:.2f} · conf {d.confidence:.2f} · "
+                f"line {format_angle(d.line_angle, 1, 180.0)}° · "
+                f"offset {d.line_offset:+.1f} px")
+    return (f"score {d.score:.2f} · conf {d.confidence:.2f} · s {d.scale:.2f} · "
+            f"{format_angle(d.angle, 1)}°")
+
+
+def _place_label(ax, text, x, y, colour, w, h):
+    """A boxed label just above (x, y), or below it near the image's top
+    edge, kept inside the image."""
+    ha = "left" if x < 0.25 * w else ("right" if x > 0.75 * w else "center")
+    dy = 10 if y < 0.08 * h else -10
+    va = "bottom" if dy < 0 else "top"
+    xs = float(np.clip(x, 0.02 * w, 0.98 * w))
+    ys = float(np.clip(y, 0.02 * h, 0.98 * h))
+    ax.annotate(text, (xs, ys), xytext=(0, -dy), textcoords="offset points", ha=ha, va=va,
+                color=colour, fontsize=10, fontweight="bold", annotation_clip=False,
+                bbox=dict(boxstyle="round,pad=0.25", fc="black", ec=colour, alpha=0.72, lw=1))
+
+
+def _free_corners(points, w, h) -> list:
+    """Image corners (0 TL, 1 TR, 2 BR, 3 BL), farthest from ``points`` first."""
+    corners = np.array([[0, 0], [w, 0], [w, h], [0, h]], float)
+    p = np.asarray(points, float).reshape(-1, 2)
+    if len(p) == 0:
+        return [1, 0, 2, 3]
+    d = np.hypot(corners[:, None, 0] - p[None, :, 0], corners[:, None, 1] - p[None, :, 1]).min(1)
+    d = d / math.hypot(w, h) + np.array([0, 1e-6, 0, 0])  # ties: top right
+    return [int(k) for k in np.argsort(-d, kind="stable")]
+
+
+_LIST_TEXT = dict(fontsize=10, fontweight="bold")
+_LIST_PAD = 16          # px around the text of a list box (pad, border, rounding)
+_LIST_SEP = 3           # px between its lines
+
+
+def _wrap_label(fig: Figure, text: str, max_w: float) -> str:
+    """``text`` broken at its " · " separators into lines at most ``max_w``
+    px wide (continuation lines indented); a part wider than that alone
+    stays on its own line."""
+    parts = text.split(" · ")
+    lines = [parts[0]]
+    for part in parts[1:]:
+        trial = f"{lines[-1]} · {part}"
+        if _text_size(fig, trial, **_LIST_TEXT)[0] <= max_w:
+            lines[-1] = trial
+        else:
+            lines.append("   " + part)
+    return "\n".join(lines)
+
+
+def _list_size(fig: Figure, items) -> tuple[float, float]:
+    """``(width, height)`` in px of the list box :func:`_label_list` draws."""
+    sizes = [_text_size(fig, t, **_LIST_TEXT) for t, _ in items]
+    return (max(sw for sw, _ in sizes) + _LIST_PAD,
+            sum(sh for _, sh in sizes) + _LIST_SEP * (len(sizes) - 1) + _LIST_PAD)
+
+
+def _label_list(ax, items, corner: int = 1, at=None):
+    """A boxed list of coloured lines: in an image corner, or with its top
+    left corner at ``at`` (figure fraction) when given."""
+    rows = [TextArea(t, textprops=dict(color=c, **_LIST_TEXT)) for t, c in items]
+    box = VPacker(children=rows, align="left", pad=0, sep=_LIST_SEP)
+    if at is None:
+        loc = {0: "upper left", 1: "upper right", 2: "lower right", 3: "lower left"}[corner]
+        anchored = AnchoredOffsetbox(loc=loc, child=box, pad=0.4, borderpad=0.6, frameon=True)
+    else:
+        anchored = AnchoredOffsetbox(loc="upper left", child=box, pad=0.4, borderpad=0.0,
+                                     frameon=True, bbox_to_anchor=at,
+                                     bbox_transform=ax.figure.transFigure)
+    anchored.patch.set_facecolor("black")
+    anchored.patch.set_alpha(0.72)
+    anchored.patch.set_edgecolor("white")
+    anchored.patch.set_boxstyle("round,pad=0.2")
+    ax.add_artist(anchored)
+    return anchored
+
+
+def _draw_pattern(ins, pattern):
+    """The pattern's image and outline in the axes ``ins``, titled."""
+    ins.imshow(pattern.image, cmap="gray", vmin=0, vmax=255)
+    for o in pattern.outline:
+        o = np.asarray(o, float)
+        if pattern.closed and len(o) > 2:
+            o = np.vstack([o, o[:1]])
+        ins.plot(o[:, 0], o[:, 1], color=COLOURS[0], lw=1.5)
+    ins.set_xticks([]); ins.set_yticks([])
+    for s in ins.spines.values():
+        s.set_color("white"); s.set_linewidth(1.5)
+    ins.set_title("pattern", color="white", fontsize=9, pad=2,
+                  path_effects=_TEXT_OUTLINE)
+    return ins
+
+
+def _pattern_inset(ax, pattern, corner: int):
+    """The pattern in an inset of at most a fifth of ``ax`` in an image corner
+    (0 TL, 1 TR, 2 BR, 3 BL)."""
+    size = 0.2
+    pos = {0: (0.015, 0.955 - size), 1: (0.985 - size, 0.955 - size),
+           2: (0.985 - size, 0.015), 3: (0.015, 0.015)}[corner]
+    ph, pw = pattern.image.shape
+    aspect = pw / ph
+    bw, bh = (size, size / aspect) if aspect >= 1 else (size * aspect, size)
+    x0 = pos[0] + (size - bw if corner in (1, 2) else 0)
+    y0 = pos[1] + (size - bh if corner in (0, 1) else 0)
+    return _draw_pattern(ax.inset_axes([x0, y0, bw, bh]), pattern)
+
+
+def _pattern_beside(fig: Figure, pattern, x0: float, y_top: float, max_w: float):
+    """The pattern in a box of at most ``max_w`` (and 140) px, its top left at
+    (``x0``, ``y_top``) figure px (room left above for its title)."""
+    ph, pw = pattern.image.shape
+    side = min(max_w, 140.0)
+    bw, bh = (side, side * ph / pw) if pw >= ph else (side * pw / ph, side)
+    fw, fh = fig.get_size_inches() * fig.dpi
+    y0 = y_top - 16 - bh
+    return _draw_pattern(fig.add_axes([x0 / fw, y0 / fh, bw / fw, bh / fh]), pattern)
+
+
+def _image_px(shape_wh, box_wh) -> tuple[float, float]:
+    """Size in px of an image of ``shape_wh`` (w, h) drawn in a box of
+    ``box_wh`` px keeping its aspect."""
+    (w, h), (bw, bh) = shape_wh, box_wh
+    s = min(bw / w, bh / h)
+    return w * s, h * s
+
+
+def _short_strip(w, h, box_w, box_h) -> bool:
+    """Is the drawn image so much shorter than its box that its notes go
+    under it (see :data:`_MIN_BOX_HEIGHT`)?"""
+    return box_h - _image_px((w, h), (box_w, box_h))[1] >= _UNDER_AXIS + 60
+
+
+def _fits_beside_object(fig, text, w, h, box_w, box_h) -> bool:
+    """Whether a single detection's boxed label fits across the drawn image
+    (a short strip's labels go under it)."""
+    if _short_strip(w, h, box_w, box_h):
+        return False
+    tw, _ = _text_size(fig, text, **_LIST_TEXT)
+    return tw + _LIST_PAD <= 0.96 * _image_px((w, h), (box_w, box_h))[0]
+
+
+def _notes(fig, ax, detections, pattern, corners, wh, box_wh):
+    """The detection list, the "not found" note and the pattern inset.
+
+    In an image corner when they fit there; next to an image too narrow
+    for them (the image is then drawn on the left and they go in the space
+    on its right); else with the lines wrapped to fit inside the image.
+    """
+    left, _, bottom, _ = _MARGINS
+    fw, fh = fig.get_size_inches() * fig.dpi
+    dw, dh = _image_px(wh, box_wh)
+    n = len(detections)
+    items = [((f"#{i + 1} " if n > 1 else "") + _det_label(d), COLOURS[i % len(COLOURS)])
+             for i, d in enumerate(detections)]
+    lw, lh = _list_size(fig, items) if items else (0.0, 0.0)
+    nf_size = 30
+    nf_w = _text_size(fig, "not found", fontsize=nf_size, fontweight="bold")[0] + 30
+    if n == 1:
+        inside = _fits_beside_object(fig, items[0][0], *wh, *box_wh)
+    elif n > 1:
+        inside = lw <= 0.94 * dw and lh <= 0.6 * dh
+    else:
+        inside = nf_w <= 0.9 * dw
+    x_side = left + dw + 14                     # the image drawn on the left
+    side_w = fw - x_side - 8
+    top_px = bottom + box_wh[1] / 2 + dh / 2    # the image's top edge
+    if _short_strip(*wh, *box_wh):
+        # the box is taller than the image: the image at the top, the notes
+        # under its x axis
+        ax.set_anchor("N")
+        _notes_below(fig, items, pattern, (left, bottom + box_wh[1] - dh - _UNDER_AXIS),
+                     fw - left - 8, nf_size)
+        return
+    if not inside and side_w >= 120:
+        ax.set_anchor("W")
+        y = top_px
+        if items:
+            items = [(_wrap_label(fig, t, side_w - _LIST_PAD), c) for t, c in items]
+            _label_list(ax, items, at=(x_side / fw, y / fh))
+            y -= _list_size(fig, items)[1] + 12
+        else:
+            size = nf_size
+            while size > 12 and _text_size(fig, "not found", fontsize=size,
+                                           fontweight="bold")[0] + size > side_w:
+                size -= 2
+            pad = 0.4 * size * DPI / 72             # the box's padding, px
+            fig.text((x_side + pad) / fw, (y - pad) / fh, "not found", ha="left", va="top",
+                     fontsize=size,
+                     fontweight="bold", color="white", path_effects=_TEXT_OUTLINE,
+                     bbox=dict(boxstyle="round,pad=0.4", fc="#b00020", ec="white", alpha=0.8))
+            y -= 2.3 * size * DPI / 72 + 12
+        if pattern is not None:
+            _pattern_beside(fig, pattern, x_side, y, side_w)
+        return
+    if n == 1 and not inside:
+        # no room beside the image: the label wrapped, in a free corner
+        items = [(_wrap_label(fig, items[0][0], 0.94 * dw - _LIST_PAD), items[0][1])]
+        _label_list(ax, items, corners[0])
+        corners = corners[1:]
+    elif n > 1:
+        if not inside:
+            items = [(_wrap_label(fig, t, 0.94 * dw - _LIST_PAD), c) for t, c in items]
+        _label_list(ax, items, corners[0])
+        corners = corners[1:]
+    elif n == 0:
+        size = nf_size
+        while size > 10 and _text_size(fig, "not found", fontsize=size,
+                                       fontweight="bold")[0] + 30 > 0.9 * dw:
+            size -= 2
+        ax.text(0.5, 0.5, "not found", transform=ax.transAxes, ha="center", va="center",
+                fontsize=size, fontweight="bold", color="white", path_effects=_TEXT_OUTLINE,
+                bbox=dict(boxstyle="round,pad=0.4", fc="#b00020", ec="white", alpha=0.8))
+    if pattern is not None:
+        _pattern_inset(ax, pattern, corners[0])
+
+
+def _notes_below(fig, items, pattern, top_left, width, nf_size):
+    """The detection list (or "not found") and the pattern, side by side,
+    their tops at ``top_left`` (figure px), within ``width`` px.
+
+    A short strip leaves at least 97 px under its axis (see
+    :func:`_short_strip`), room for the note at ``nf_size`` (2.3 lines of 30
+    points: 96 px)."""
+    fw, fh = fig.get_size_inches() * fig.dpi
+    x, y = top_left
+    room = y - 8                                  # px down to the figure's bottom
+    if items:
+        items = [(_wrap_label(fig, t, width - _LIST_PAD - 150), c) for t, c in items]
+        _label_list(fig.axes[0], items, at=(x / fw, y / fh))
+        x += _list_size(fig, items)[0] + 14
+    else:
+        pad = 0.4 * nf_size * DPI / 72
+        fig.text((x + pad) / fw, (y - pad) / fh, "not found", ha="left", va="top",
+                 fontsize=nf_size, fontweight="bold", color="white", path_effects=_TEXT_OUTLINE,
+                 bbox=dict(boxstyle="round,pad=0.4", fc="#b00020", ec="white", alpha=0.8))
+        x += _text_size(fig, "not found", fontsize=nf_size, fontweight="bold")[0] + 2 * pad + 14
+    if pattern is not None:
+        ph, pw = pattern.image.shape
+        side = max(min(room - 16, width - (x - top_left[0])), 8.0)  # 16: the title above it
+        _pattern_beside(fig, pattern, x, y, side if pw >= ph else side * pw / ph)
+
+
+def plot_detections(image, detections, path=None, *, pattern=None, title=None) -> Figure:
+    """The image with each detection's outline, origin and numbers.
+
+    Parameters
+    ----------
+    image : ndarray or path
+        The searched image: BGR/BGRA (shown in its colours) or grey.
+    detections : list of Detection
+        From :meth:`seahough.Detector.detect`; best first. Objects are drawn
+        with their closed outline; lines (``kind == "line"``) across the
+        whole image along ``line_angle`` through ``(x, y)``, with their two
+        borders dashed. Each gets a label
+        ``"score 0.87 · conf 0.64 · s 1.23 · 45.0°"`` (angles in [0, 360),
+        lines' in [0, 180), wrapped after rounding): beside a single
+        detection, or, for several, in a numbered list in the image corner
+        farthest from them; an empty list writes "not found" across the
+        image. When an image is too narrow for them (a tall strip), the
+        image is drawn on the left and the labels (wrapped as needed), the
+        note and the pattern go in the space on its right; under a short
+        strip (drawn less than 240 px high, e.g. 900 x 60), they go below
+        it: nothing spills onto the axes.
+    path : str or Path, optional
+        Where to save the PNG.
+    pattern : Pattern, optional
+        Shown as a small inset (with its outline) in the image corner
+        farthest from the detections (or beside a narrow image).
+    title : str, optional
+        Default: how many detections were found.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        :func:`detections_size` px (1000 x 775 for a 640 x 480 image).
+
+    Examples
+    --------
+    >>> import numpy as np, seahough
+    >>> from seahough.viz import plot_detections
+    >>> img = np.full((120, 160), 40, np.uint8)
+    >>> img[40:70, 50:100] = 220                      # a bright 50 x 30 box
+    >>> pattern = seahough.Pattern.rectangle(50, 30)
+    >>> found = seahough.Detector(pattern, max_results=1).detect(img)
+    >>> fig = plot_detections(img, found, pattern=pattern)   # path=...: also a PNG
+    >>> tuple(int(v) for v in fig.get_size_inches() * fig.dpi)
+    (1000, 775)
+    """
+    disp, colour = _as_display(image)
+    h, w = disp.shape[:2]
+    fw, fh = detections_size((h, w))
+    fig = _figure(fw, fh)
+    left, right, bottom, top = _MARGINS
+    iw, ih = fw - left - right, fh - bottom - top
+    ax = fig.add_axes([left / fw, bottom / fh, iw / fw, ih / fh])
+    _show(ax, disp, colour)
+    ax.set_xlabel("x (px)")
+    ax.set_ylabel("y (px)")
+    detections = list(detections or [])
+    anchors = []
+    for i, d in enumerate(detections):
+        c = COLOURS[i % len(COLOURS)]
+        is_line = d.kind == "line"
+        if is_line and d.line_angle is not None:
+            # the rope's two borders, extended across the image (the rope shows
+            # between them); the centre line when the outline is missing
+            borders = [np.asarray(o, float).reshape(-1, 2) for o in d.outline]
+            borders = [o[0] for o in borders if len(o) >= 2] or [np.array([d.x, d.y])]
+            for bx, by in borders:
+                e = _line_ends(bx, by, d.line_angle, w, h)
+                if e is not None:
+                    ax.plot([e[0][0], e[1][0]], [e[0][1], e[1][1]], color=c, lw=1.8,
+                            path_effects=_OUTLINE)
+        else:
+            for o in d.outline:
+                o = np.asarray(o, float).reshape(-1, 2)
+                if len(o) > 2:
+                    o = np.vstack([o, o[:1]])
+                ax.plot(o[:, 0], o[:, 1], color=c, lw=2.2, path_effects=_OUTLINE)
+        ax.plot([d.x], [d.y], marker="+", ms=16, mew=2.5, color=c, path_effects=_OUTLINE)
+        if is_line:                         # its label at the point nearest the centre
+            anchors.append(np.array([[d.x, d.y]]))
+            lx, ly = d.x, d.y
+        else:                               # above the outline's top, centred on it
+            pts = np.vstack([np.asarray(o, float).reshape(-1, 2) for o in d.outline]) \
+                if d.outline else np.array([[d.x, d.y]])
+            anchors.append(pts)
+            lx, ly = float(np.mean(pts[:, 0])), float(pts[:, 1].min())
+        if len(detections) == 1:
+            if _fits_beside_object(fig, _det_label(d), w, h, iw, ih):
+                _place_label(ax, _det_label(d), lx, ly, c, w, h)
+        else:
+            _place_label(ax, f"#{i + 1}", lx, ly, c, w, h)
+    corners = _free_corners(np.vstack(anchors) if anchors else np.empty((0, 2)), w, h)
+    _notes(fig, ax, detections, pattern, corners, (w, h), (iw, ih))
+    if title is None:
+        n = len(detections)
+        title = "pattern not found" if n == 0 else f"{n} detection{'s' if n > 1 else ''}"
+    ax.set_title(title, fontsize=12, loc="left")
+    return _finish(fig, path)
+

@@ -1,0 +1,97 @@
+"""The picture of what the detector saw: the working image, its gradient
+magnitude, the key points and the edge segments traced from them."""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.collections import LineCollection
+from matplotlib.figure import Figure
+
+from ._figure import _figure, _finish
+
+
+def plot_edges(image, features, path=None, *, title=None) -> Figure:
+    """What the detector saw: the working image, and its gradient magnitude
+    with the chosen key points and the edge segments traced from them
+    (the paper's Figs. 1-3), in working-image pixels. For tuning
+    ``Config.n_keypoints``, ``min_gradient``, ``downscale`` and ``equalize``.
+
+    Parameters
+    ----------
+    image : ndarray or path
+        The photo the features were computed from (not read again: the
+        working image is in ``features``).
+    features : Features
+        ``SearchResult.features`` (or :func:`seahough.core.features.extract_features`).
+    path : str or Path, optional
+        Where to save the PNG.
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        1300 x 560 px.
+
+    Raises
+    ------
+    ValueError
+        When ``features`` is None: the picture never runs the search.
+
+    Examples
+    --------
+    The features come from the search; the picture does not compute them.
+
+    >>> import numpy as np, seahough
+    >>> from seahough.viz import plot_edges
+    >>> disc = np.zeros((90, 120), np.uint8)
+    >>> disc[np.hypot(*np.mgrid[-45:45, -60:60]) < 30] = 255
+    >>> res = seahough.Detector(seahough.Pattern.rectangle(40, 40)).search(disc)
+    >>> fig = plot_edges(disc, res.features, title="a disc")   # path=...: also a PNG
+    >>> tuple(int(v) for v in fig.get_size_inches() * fig.dpi)
+    (1300, 560)
+    >>> plot_edges(disc, None)
+    Traceback (most recent call last):
+    ...
+    ValueError: plot_edges needs the search's features (SearchResult.features)
+    """
+    if features is None:
+        raise ValueError("plot_edges needs the search's features (SearchResult.features)")
+    g = features.gradients
+    mag = np.asarray(g.magnitude, float)
+    h, w = mag.shape
+    fig = _figure(1300, 560)
+    top = 0.86
+    ax1 = fig.add_axes([0.05, 0.1, 0.40, top - 0.1])
+    ax2 = fig.add_axes([0.52, 0.1, 0.40, top - 0.1])
+    cax = fig.add_axes([0.93, 0.1, 0.012, top - 0.1])
+    ax1.imshow(g.image, cmap="gray", vmin=0, vmax=255)
+    ax1.set_title(f"working image ({w} x {h} px, factor {g.factor:.2f})", fontsize=11)
+    vmax = float(np.percentile(mag, 99.5)) if mag.size else 1.0
+    # a flat image: a plain 0-1 scale rather than a 1e-6 one
+    im = ax2.imshow(mag, cmap="gray", vmin=0, vmax=vmax if vmax >= 1.0 else 1.0)
+    cb = fig.colorbar(im, cax=cax)
+    cb.set_label("Scharr gradient magnitude (clipped at 99.5 %)")
+    seg = features.segments
+    n_seg = len(seg)
+    if n_seg:
+        lines = np.stack([np.stack([seg.x1, seg.y1], 1), np.stack([seg.x2, seg.y2], 1)], 1)
+        ax2.add_collection(LineCollection(lines, colors="#00e5ff", linewidths=2.4, zorder=3,
+                                          label=f"segments ({n_seg})"))
+    kp = np.asarray(features.keypoints)
+    if kp.size:
+        ax2.scatter(features.edges.x[kp], features.edges.y[kp], s=3, c="#ff2d2d", lw=0,
+                    label=f"key points ({kp.size})", zorder=4)
+    for ax in (ax1, ax2):
+        ax.set_xlim(-0.5, w - 0.5)
+        ax.set_ylim(h - 0.5, -0.5)
+        ax.set_xlabel("x (working px)")
+        ax.set_ylabel("y (working px)")
+    ax2.set_title(f"gradient magnitude, key points, segments ({len(features.edges)} edge points)",
+                  fontsize=11)
+    if n_seg or kp.size:
+        leg = ax2.legend(loc="upper right", fontsize=9, framealpha=0.8, markerscale=3)
+        leg.get_frame().set_facecolor("white")
+    if title:
+        fig.suptitle(title, fontsize=12, x=0.01, ha="left")
+    return _finish(fig, path)
+

@@ -1,0 +1,167 @@
+"""Pictures of a camera's motion: the dead-reckoned path, and writing a mosaic."""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+import cv2
+import numpy as np
+from matplotlib.figure import Figure
+
+from ._figure import TRUTH_COLOUR, _figure, _finish
+
+
+def _rows_of(rows_or_result):
+    """The rows of an OdometryResult, or the list given (None: no rows)."""
+    rows = getattr(rows_or_result, "rows", rows_or_result)
+    return list(rows or [])
+
+
+def _num(v):
+    """``v`` as a float; NaN when it is missing or not a number."""
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        return math.nan
+    return f
+
+
+def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=None) -> Figure:
+    """The dead-reckoned path seen from above.
+
+    Parameters
+    ----------
+    rows_or_result : OdometryResult or list of dict
+        Rows with ``x``, ``y`` (position), ``heading`` (degrees) and
+        ``flags``; ``x`` right and ``y`` down as in the first frame (so the
+        path looks like the mosaic).
+    path : str or Path, optional
+        Where to save the PNG.
+    unit : str
+        Unit of ``x``, ``y`` for the axis labels (``"px"``, ``"m"``).
+    truth : (N, 2) array, optional
+        The true positions: a wide light grey band with a ring at each
+        position, under the estimate (the estimate shows inside the band
+        where both agree, and the band beside it where they do not).
+    title : str, optional
+
+    Notes
+    -----
+    The start is a green circle, the end a black square; frames with flags
+    (a pair whose motion could not be measured or is doubtful) are red
+    crosses; a few arrows show the heading (0 = up in the first frame,
+    counter-clockwise positive as displayed).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        900 x 800 px.
+
+    Examples
+    --------
+    >>> from seahough.viz import plot_trajectory
+    >>> rows = [{"x": 0.0, "y": 0.0, "heading": 0.0, "flags": []},
+    ...         {"x": 3.0, "y": -4.0, "heading": 10.0, "flags": []},
+    ...         {"x": 6.0, "y": -8.0, "heading": None, "flags": ["lost"]}]
+    >>> fig = plot_trajectory(rows, unit="m")   # path=...: also a PNG
+    >>> fig.axes[0].get_title()
+    'dead-reckoned path: 3 frames, 10.0 m travelled, 1 flagged'
+    >>> tuple(int(v) for v in fig.get_size_inches() * fig.dpi)
+    (900, 800)
+    """
+    rows = _rows_of(rows_or_result)
+    fig = _figure(900, 800)
+    ax = fig.add_axes([0.1, 0.08, 0.86, 0.84])
+    xs = np.array([_num(r.get("x")) for r in rows], float)
+    ys = np.array([_num(r.get("y")) for r in rows], float)
+    ok = np.isfinite(xs) & np.isfinite(ys)
+    dist = float(np.hypot(np.diff(xs[ok]), np.diff(ys[ok])).sum())
+    flagged = np.array([bool(r.get("flags")) for r in rows], bool)
+    if truth is not None:
+        t = np.asarray(truth, float).reshape(-1, 2)
+        # under the estimate, wide and light, a ring at each true position: the
+        # thin estimate shows inside it where both agree, beside it where not
+        ax.plot(t[:, 0], t[:, 1], "-", color=TRUTH_COLOUR, lw=9, alpha=0.85,
+                solid_capstyle="round", solid_joinstyle="round", zorder=1.5)
+        ax.plot(t[:, 0], t[:, 1], "o", ms=9, mfc="none", mec="#5a5a5a", mew=1.2, zorder=1.6)
+        ax.plot([], [], "-o", color=TRUTH_COLOUR, lw=6, ms=9, mfc="none", mec="#5a5a5a",
+                label="truth")
+    if ok.any():
+        ax.plot(xs[ok], ys[ok], "-", color="#1f5fbf", lw=2.2, label="dead reckoning")
+        ax.plot(xs[ok], ys[ok], ".", color="#1f5fbf", ms=6)
+        i0 = int(np.flatnonzero(ok)[0]); i1 = int(np.flatnonzero(ok)[-1])
+        ax.plot(xs[i0], ys[i0], "o", ms=12, color="#1aa442", mec="black", label="start", zorder=4)
+        ax.plot(xs[i1], ys[i1], "s", ms=11, color="black", label="end", zorder=4)
+        bad = flagged & ok
+        if bad.any():
+            ax.plot(xs[bad], ys[bad], "x", ms=11, mew=2.5, color="#e0001b",
+                    label=f"flagged ({int(bad.sum())})", zorder=5)
+        hd = np.array([_num(r.get("heading")) for r in rows], float)
+        sel = np.flatnonzero(ok & np.isfinite(hd))
+        if sel.size:
+            sel = sel[::math.ceil(sel.size / 12)]          # at most 12 arrows
+            span = max(np.ptp(xs[ok]), np.ptp(ys[ok]), 1e-9)
+            L = 0.06 * span
+            t = np.radians(hd[sel])
+            # heading 0 = up (-y); positive turns counter-clockwise as displayed
+            ax.quiver(xs[sel], ys[sel], -np.sin(t) * L, -np.cos(t) * L, angles="xy",
+                      scale_units="xy", scale=1, color="#ff9500", width=0.004, zorder=3,
+                      label="heading")
+    else:
+        ax.text(0.5, 0.5, "no positions", transform=ax.transAxes, ha="center", va="center",
+                fontsize=20)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.invert_yaxis()
+    ax.grid(True, alpha=0.3)
+    ax.set_xlabel(f"x ({unit})")
+    ax.set_ylabel(f"y ({unit}, down as in the first frame)")
+    if title is None:
+        title = (f"dead-reckoned path: {len(rows)} frames, {dist:.1f} {unit} travelled, "
+                 f"{int(flagged.sum())} flagged")
+    ax.set_title(title, fontsize=12)
+    if ok.any():
+        ax.legend(loc="best", fontsize=9, framealpha=0.85)
+    return _finish(fig, path)
+
+
+def save_mosaic(image, path) -> Path:
+    """Write a mosaic (or any OpenCV image) to ``path`` (PNG, JPEG... by
+    extension), creating the folder; returns the path.
+
+    Parameters
+    ----------
+    image : ndarray
+        Grey, BGR or BGRA, as OpenCV writes it; other than uint8 is clipped
+        to 0-255 and truncated to uint8.
+    path : str or Path
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    OSError
+        When OpenCV cannot write the file.
+
+    Examples
+    --------
+    >>> import tempfile, cv2, numpy as np
+    >>> from pathlib import Path
+    >>> from seahough.viz import save_mosaic
+    >>> mosaic = np.zeros((20, 30, 3), np.uint8)
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     p = save_mosaic(mosaic, Path(tmp) / "run" / "mosaic.png")
+    ...     print(p.name, cv2.imread(str(p)).shape)
+    mosaic.png (20, 30, 3)
+    """
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    a = np.asarray(image)
+    if a.dtype != np.uint8:
+        a = np.clip(a, 0, 255).astype(np.uint8)
+    if not cv2.imwrite(os.fspath(p), a):
+        raise OSError(f"{p}: cannot write the image (unknown extension or unwritable folder)")
+    return p
