@@ -5,7 +5,6 @@ tests), in a subprocess."""
 from __future__ import annotations
 
 import csv
-import importlib.util
 import json
 import os
 import subprocess
@@ -24,7 +23,6 @@ from seahough._data import shared_data_dir
 
 from conftest import seahough_command
 
-HAS_ODOMETRY = importlib.util.find_spec("seahough.motion.odometry") is not None
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
@@ -279,7 +277,7 @@ def test_not_found_says_why(tmp_path):
 
 def test_angles_near_360_are_printed_wrapped():
     """The table prints the rounded angle in [0, 360) (lines: [0, 180))."""
-    from seahough.cli import _detection_lines
+    from seahough.cli.detect import _detection_lines
     from seahough.geometry import format_angle
 
     assert format_angle(359.998) == "0.00" and format_angle(359.994) == "359.99"
@@ -386,6 +384,42 @@ def test_simulate_writes_scenes_and_truth(tmp_path, kind):
         assert "motion_from_previous" in items[1]
 
 
+def test_write_simulation_is_the_library_behind_the_command(tmp_path):
+    """`seahough simulate` writes what seahough.sim.files.write_simulation
+    writes; the function raises seahough errors, which the command prints as
+    one line (exit status 2)."""
+    from seahough.errors import ParameterError, SeahoughError, WriteError
+    from seahough.sim.files import write_simulation
+
+    args = dict(n=2, seed=4, water="clear", size=(160, 120), procedural=True)
+    truth = write_simulation("rope", tmp_path / "lib", **args)
+    proc = run("simulate", "rope", "--out", tmp_path / "cmd", "--n", 2, "--seed", 4, "--water",
+               "clear", "--procedural", "--size", 160, 120, "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    text = (tmp_path / "cmd" / "truth.json").read_text()
+    assert text == (tmp_path / "lib" / "truth.json").read_text() and json.loads(text) == truth
+    for name in ("rope_000.png", "rope_001.png"):
+        assert (tmp_path / "cmd" / name).read_bytes() == (tmp_path / "lib" / name).read_bytes()
+    with pytest.raises(ParameterError, match="kind='blob'"):
+        write_simulation("blob", tmp_path / "x")
+    with pytest.raises(ParameterError, match="water='murky'"):
+        write_simulation("marker", tmp_path / "x", water="murky")
+    # a folder where a file should go
+    (tmp_path / "blocked" / "marker_000.png").mkdir(parents=True)
+    (tmp_path / "blocked2" / "truth.json").mkdir(parents=True)
+    with pytest.raises(WriteError, match="marker_000.png: cannot write the image") as info:
+        write_simulation("marker", tmp_path / "blocked", **args)
+    assert isinstance(info.value, OSError) and isinstance(info.value, SeahoughError)
+    with pytest.raises(WriteError, match="truth.json"):
+        write_simulation("marker", tmp_path / "blocked2", **args)
+    for sub, needle in (("blocked", "marker_000.png: cannot write the image"),
+                        ("blocked2", "truth.json: ")):
+        proc = run("simulate", "marker", "--out", tmp_path / sub, "--procedural", "--size", 160,
+                   120)
+        assert_one_error_line(proc, str(tmp_path / sub / needle))
+        assert proc.stdout == ""
+
+
 def test_odometry_command_calls_run_odometry(tmp_path, monkeypatch, capsys):
     """The command's wiring to seahough.motion.odometry.run_odometry (a stand-in here)."""
     from seahough import cli
@@ -424,7 +458,43 @@ def test_odometry_command_calls_run_odometry(tmp_path, monkeypatch, capsys):
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
 
 
-@pytest.mark.skipif(not HAS_ODOMETRY, reason="seahough.motion.odometry is not there yet")
+@pytest.mark.parametrize("old_keys", [False, True])
+def test_odometry_command_prints_the_canonical_summary_keys(tmp_path, monkeypatch, capsys,
+                                                            old_keys):
+    """distance: path_length_m when not None, else path_length_px; time per
+    frame: mean_ms_per_frame; keys the summary once had for the command
+    (distance, unit, ms_per_frame) are not read."""
+    from seahough import cli
+
+    summary = {"frames": 3, "flagged_pairs": 0, "path_length_px": 250.0, "path_length_m": 2.5,
+               "mean_ms_per_frame": 12.0}
+    if old_keys:
+        summary.update(distance=999.0, unit="furlongs", ms_per_frame=999.0)
+
+    def fake_run_odometry(frames, out_dir, **kw):
+        rows = [{"index": i, "file": f"f{i}.png", "x": 0.0, "y": 0.0, "flags": []}
+                for i in range(3)]
+        return types.SimpleNamespace(rows=rows, summary=summary, csv_path=None, json_path=None,
+                                     mosaic_path=None, trajectory_path=None)
+
+    fake = types.ModuleType("seahough.motion.odometry")
+    fake.run_odometry = fake_run_odometry
+    monkeypatch.setitem(sys.modules, "seahough.motion.odometry", fake)
+    (tmp_path / "frames").mkdir()
+    argv = ["odometry", str(tmp_path / "frames"), "--out", str(tmp_path / "o"), "--quiet"]
+    for path_length_m, want in ((2.5, "distance: 2.50 m"), (None, "distance: 250.00 px")):
+        summary["path_length_m"] = path_length_m
+        with pytest.raises(SystemExit) as ex:
+            cli.main(argv)
+        assert ex.value.code == 0
+        assert capsys.readouterr().out.splitlines() == [
+            f"frames: 3   flagged pairs: 0   {want}   time per frame: 12 ms"]
+    with pytest.raises(SystemExit):
+        cli.main(argv + ["--json"])
+    got = json.loads(capsys.readouterr().out)
+    assert (got["distance"], got["unit"], got["time_per_frame_ms"]) == (250.0, "px", 12.0)
+
+
 def test_odometry_on_simulated_sequence(tmp_path):
     proc = run("simulate", "sequence", "--out", tmp_path / "seq", "--n", 5, "--procedural",
                "--seed", 2)
@@ -470,7 +540,6 @@ def sequence_dir(tmp_path_factory):
     return d
 
 
-@pytest.mark.skipif(not HAS_ODOMETRY, reason="seahough.motion.odometry is not there yet")
 def test_odometry_progress_bar_like_detect(sequence_dir, tmp_path):
     """On a terminal the bar is drawn, --quiet removes it; into a pipe or a
     log file it is not drawn (as detect's)."""
@@ -485,7 +554,6 @@ def test_odometry_progress_bar_like_detect(sequence_dir, tmp_path):
     assert json.loads(proc.stdout)["frames"] == 8
 
 
-@pytest.mark.skipif(not HAS_ODOMETRY, reason="seahough.motion.odometry is not there yet")
 def test_odometry_resume_after_a_killed_run(sequence_dir, tmp_path):
     """--resume continues the CSV a killed run left (a header, a few rows
     and a row cut short) to the result of an uninterrupted run."""
@@ -522,9 +590,8 @@ def test_demo_end_to_end(tmp_path):
             "marker_edges.png": (1300, 560), "rope_scene.png": (640, 480),
             "rope_overlay.png": overlay, "rope_accumulator.png": (1300, 560),
             **{f"sequence/frame_{i:03d}.png": (320, 240) for i in range(8)}}
-    if HAS_ODOMETRY:
-        want.update({"trajectory.png": (900, 800), "odometry/trajectory.png": (900, 800),
-                     "odometry/mosaic.png": None})
+    want.update({"trajectory.png": (900, 800), "odometry/trajectory.png": (900, 800),
+                 "odometry/mosaic.png": None})
     # every picture the demo writes is checked: a new one must be added here
     written = sorted(p.relative_to(out).as_posix() for p in out.rglob("*.png"))
     assert written == sorted(want)
@@ -537,5 +604,4 @@ def test_demo_end_to_end(tmp_path):
         im = cv2.imread(str(out / name))
         assert im.std() > 5, f"{name} is (almost) blank"
     assert "marker position" in proc.stdout and "rope offset" in proc.stdout
-    if HAS_ODOMETRY:
-        assert "drift" in proc.stdout
+    assert "drift" in proc.stdout

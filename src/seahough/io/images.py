@@ -12,7 +12,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from ..errors import ImageReadError, ImageSizeError, ImageValueError
+from ..errors import ImageReadError, ImageSizeError, ImageValueError, WriteError
 
 #: The smallest side, in pixels, an image must have to hold any edge.
 MIN_SIDE = 8
@@ -248,3 +248,24 @@ def to_bgr8(image) -> np.ndarray:
     if a.shape[2] == 4:
         return cv2.cvtColor(a, cv2.COLOR_BGRA2BGR)
     return a
+
+
+def write_image(path, image) -> None:
+    """Write an image array to ``path`` (the format from its extension, as
+    ``cv2.imwrite``); raises :class:`~seahough.errors.WriteError` naming the
+    file when it cannot be written.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     write_image(os.path.join(d, "a.png"), np.zeros((4, 5), np.uint8))
+    ...     read_image(os.path.join(d, "a.png")).shape
+    (4, 5)
+    """
+    try:
+        ok = cv2.imwrite(os.fspath(path), image)
+    except cv2.error:
+        ok = False
+    if not ok:
+        raise WriteError(f"{path}: cannot write the image")

@@ -29,6 +29,7 @@ Examples
 """
 
 from .backgrounds import background, seabed
+from .files import write_simulation
 from .markers import MARKERS, Truth, marker, paste_pattern, random_pose
 from .scenes import fragment_scene, frame_pair, marker_scene, negative_scene, rope_scene
 from .sequences import sequence
@@ -51,4 +52,5 @@ __all__ = [
     "frame_pair",
     "rope_scene",
     "sequence",
+    "write_simulation",
 ]

@@ -1,0 +1,223 @@
+"""What the commands share: the one-line error output, JSON, tables,
+progress bars, range and number parsing, and pattern specs."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import click
+import numpy as np
+
+from ..errors import SeahoughError
+
+PROG = "seahough"
+SHAPES_HELP = ("rect:W,H | line:LENGTH,WIDTH | circle:R | circle:R,INNER (a ring) | "
+               "polygon:x1,y1,x2,y2,...")
+_SHAPE_POLARITY = {"same": "bright", "inverted": "dark", "bright": "bright", "dark": "dark",
+                   "either": "either"}
+_IMAGE_POLARITY = {"same": "same", "inverted": "inverted", "bright": "same", "dark": "inverted",
+                   "either": "either"}
+
+
+class _Fail(Exception):
+    """A user error already worded for the one-line message."""
+
+
+# --------------------------------------------------------------------------- output
+def _json_default(o):
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, Path):
+        return str(o)
+    if isinstance(o, (set, tuple)):
+        return list(o)
+    raise TypeError(f"{type(o).__name__} is not JSON serialisable")
+
+
+def _dumps(obj, **kw) -> str:
+    """``obj`` as JSON, numpy values and paths included.
+
+    >>> _dumps({"x": np.float32(0.5), "p": Path("a")})
+    '{"x": 0.5, "p": "a"}'
+    """
+    return json.dumps(obj, default=_json_default, allow_nan=True, **kw)
+
+
+def _err(msg: str) -> None:
+    """One line on stderr: ``seahough: error: msg``."""
+    msg = " ".join(str(msg).split())
+    click.echo(f"{PROG}: error: {msg}", err=True)
+
+
+def _problem(exc: Exception, name: str) -> str:
+    """The message of ``exc`` without a leading copy of the file name."""
+    msg = str(exc)
+    for prefix in (f"{name}: ", f"{Path(name)}: "):
+        if msg.startswith(prefix):
+            return msg[len(prefix):]
+    return msg
+
+
+def _out_dir(out: str) -> Path:
+    """The ``--out`` folder, created (a :class:`_Fail` when it cannot be)."""
+    o = Path(out)
+    try:
+        o.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise _Fail(f"--out {out}: cannot create the folder ({e.strerror or e})") from None
+    return o
+
+
+class _Output:
+    """stdout lines that do not tear a progress bar on stderr."""
+
+    def __init__(self, bar=None):
+        self.bar = bar
+
+    def __call__(self, line: str = "") -> None:
+        if self.bar is not None:
+            self.bar.write(line, file=sys.stdout)
+        else:
+            click.echo(line)
+        sys.stdout.flush()
+
+    def error(self, line: str) -> None:
+        line = " ".join(line.split())
+        if self.bar is not None:
+            self.bar.write(f"{PROG}: error: {line}", file=sys.stderr)
+        else:
+            _err(line)
+
+
+def _stderr_is_terminal() -> bool:
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        return False
+
+
+def _progress(iterable, total, desc, enabled, unit="img"):
+    """A tqdm bar on stderr, only when wanted and stderr is a terminal
+    (``disable=None``), wiped when done (``leave=False``)."""
+    if not enabled:
+        return None
+    from tqdm import tqdm
+    return tqdm(iterable, total=total, desc=desc, unit=unit, file=sys.stderr, disable=None,
+                leave=False, dynamic_ncols=True)
+
+
+def _table(rows, header, left=False) -> list[str]:
+    """Aligned columns (numbers right-aligned, or all left with ``left``).
+
+    >>> for line in _table([(1, "2.50", "a"), (10, "0.25", "")], ("#", "x", "flags")):
+    ...     print(line)
+       #     x  flags
+       1  2.50  a
+      10  0.25
+    """
+    cols = [header] + rows
+    widths = [max(len(str(r[i])) for r in cols) for i in range(len(header))]
+    out = []
+    for r in cols:
+        cells = [str(c) if i == len(header) - 1 else
+                 (str(c).ljust(widths[i]) if left else str(c).rjust(widths[i]))
+                 for i, c in enumerate(r)]
+        out.append("  " + "  ".join(cells).rstrip())
+    return out
+
+
+# -------------------------------------------------------------------------- parsing
+def _range_callback(positive: bool):
+    """A click callback checking a ``LOW HIGH`` option (finite, LOW <= HIGH,
+    and > 0 when ``positive``)."""
+    def check(ctx, param, value):
+        if value is None:
+            return value
+        lo, hi = value
+        flag = f"{lo:g} {hi:g}"
+        if not (math.isfinite(lo) and math.isfinite(hi)):
+            raise click.BadParameter(f"{flag}: values must be finite")
+        if lo > hi:
+            raise click.BadParameter(f"{flag}: LOW must not exceed HIGH")
+        if positive and lo <= 0:
+            raise click.BadParameter(f"{flag}: scales must be > 0")
+        return float(lo), float(hi)
+    return check
+
+
+def _numbers(text: str, spec: str) -> list[float]:
+    """The comma-separated numbers of a shape spec.
+
+    >>> _numbers("60, 40", "rect:60, 40")
+    [60.0, 40.0]
+    """
+    try:
+        vals = [float(v) for v in text.replace(" ", "").split(",") if v != ""]
+    except ValueError:
+        raise click.BadParameter(f"{spec!r}: expected numbers separated by commas "
+                                 f"({SHAPES_HELP})", param_hint="PATTERN") from None
+    if not all(math.isfinite(v) for v in vals):
+        raise click.BadParameter(f"{spec!r}: numbers must be finite", param_hint="PATTERN")
+    return vals
+
+
+_SHAPE_COUNTS = {"rect": 2, "rectangle": 2, "line": 2, "circle": (1, 2), "ring": 2,
+                 "polygon": None, "poly": None}
+_SHAPE_USAGE = {"rect": "rect:W,H (e.g. rect:60,40)", "rectangle": "rect:W,H (e.g. rect:60,40)",
+                "line": "line:LENGTH,WIDTH (e.g. line:200,8)",
+                "circle": "circle:R or circle:R,INNER (e.g. circle:30)",
+                "ring": "ring:R,INNER (e.g. ring:30,20)",
+                "polygon": "polygon:x1,y1,x2,y2,x3,y3,...",
+                "poly": "polygon:x1,y1,x2,y2,x3,y3,..."}
+
+
+def parse_pattern(spec: str, polarity: str | None = None, mask: str | None = None):
+    """A :class:`~seahough.Pattern` from an image file or a shape spec.
+
+    ``rect:W,H``, ``line:LENGTH,WIDTH``, ``circle:R``, ``circle:R,INNER``
+    (a ring), ``polygon:x1,y1,x2,y2,...``; anything else is an image file.
+
+    >>> parse_pattern("rect:60,40").kind
+    'rectangle'
+    """
+    from ..core.pattern import Pattern
+
+    kind, sep, rest = spec.partition(":")
+    kind = kind.strip().lower()
+    if sep and kind in _SHAPE_COUNTS and not Path(spec).is_file():
+        pol = _SHAPE_POLARITY[polarity or "bright"]
+        if mask is not None:
+            raise click.BadParameter("--mask applies to image patterns, not shapes",
+                                     param_hint="--mask")
+        v = _numbers(rest, spec)
+        want = _SHAPE_COUNTS[kind]
+        ok = (len(v) in want) if isinstance(want, tuple) else (
+            len(v) == want if want is not None else (len(v) >= 6 and len(v) % 2 == 0))
+        if not ok:
+            raise click.BadParameter(f"{spec!r}: expected {_SHAPE_USAGE[kind]}",
+                                     param_hint="PATTERN")
+        try:
+            if kind in ("rect", "rectangle"):
+                return Pattern.rectangle(v[0], v[1], polarity=pol)
+            if kind == "line":
+                return Pattern.line(v[0], v[1], polarity=pol)
+            if kind in ("circle", "ring"):
+                return Pattern.circle(v[0], v[1] if len(v) > 1 else None, polarity=pol)
+            return Pattern.polygon(np.reshape(v, (-1, 2)), polarity=pol)
+        except SeahoughError as e:
+            raise click.BadParameter(f"{spec!r}: {e}", param_hint="PATTERN") from None
+    p = Path(spec)
+    if not p.exists():
+        if sep and len(kind) > 1:
+            raise click.BadParameter(f"{spec!r} is neither an image file nor a shape "
+                                     f"({SHAPES_HELP})", param_hint="PATTERN")
+        raise _Fail(f"pattern {spec}: no such file")
+    try:
+        return Pattern.from_image(spec, mask=mask, polarity=_IMAGE_POLARITY[polarity or "same"])
+    except SeahoughError as e:
+        raise _Fail(f"pattern {spec}: {_problem(e, spec)}") from None

@@ -1,0 +1,149 @@
+"""``seahough odometry``: dead reckoning over a sequence of frames."""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import click
+import numpy as np
+
+from ._common import _Fail, _dumps, _range_callback, _stderr_is_terminal
+
+
+def _number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _path_length(rows) -> float:
+    """Length of the path through the rows' ``x, y`` (rows without a position skipped).
+
+    >>> _path_length([{"x": 0, "y": 0}, {"x": None, "y": None}, {"x": 3, "y": 4}])
+    5.0
+    """
+    pts = np.array([[np.nan if r.get("x") is None else float(r["x"]),
+                     np.nan if r.get("y") is None else float(r["y"])] for r in rows], float)
+    pts = pts[np.all(np.isfinite(pts), axis=1)] if len(pts) else pts
+    return float(np.hypot(*np.diff(pts, axis=0).T).sum()) if len(pts) > 1 else 0.0
+
+
+def _odometry_rows(result):
+    """The run's rows one at a time (a long survey's rows are not all loaded)."""
+    it = getattr(result, "iter_rows", None)
+    return it() if callable(it) else iter(result.rows)
+
+
+def _str_or_none(p):
+    return None if p is None else str(p)
+
+
+def _odometry_summary(result, wall_s: float, unit: str) -> dict:
+    """What the command prints, from the run's summary (``path_length_m``
+    when not None, else ``path_length_px``; ``mean_ms_per_frame``). The rows
+    are read only where the summary lacks a count or the path length, and
+    ``unit`` ("m" or "px", from the options) labels that length."""
+    s = dict(getattr(result, "summary", {}) or {})
+    n = s.get("frames")
+    if not isinstance(n, int):
+        n = sum(1 for _ in _odometry_rows(result))
+    flagged = s.get("flagged_pairs")
+    if not isinstance(flagged, int):
+        flagged = sum(1 for r in _odometry_rows(result) if r.get("flags") and r.get("index", 0) > 0)
+    if _number(s.get("path_length_m")):
+        dist, unit = s["path_length_m"], "m"
+    elif _number(s.get("path_length_px")):
+        dist, unit = s["path_length_px"], "px"
+    else:
+        dist = _path_length(list(_odometry_rows(result)))
+    per = s.get("mean_ms_per_frame")
+    per = float(per) if _number(per) else 1000.0 * wall_s / max(n, 1)
+    return {"frames": n, "flagged_pairs": flagged, "distance": float(dist), "unit": unit,
+            "time_per_frame_ms": per,
+            "csv": _str_or_none(getattr(result, "csv_path", None)),
+            "json": _str_or_none(getattr(result, "json_path", None)),
+            "mosaic": _str_or_none(getattr(result, "mosaic_path", None)),
+            "trajectory": _str_or_none(getattr(result, "trajectory_path", None)),
+            "summary": s}
+
+
+@click.command(no_args_is_help=True)
+@click.argument("frames", nargs=-1, required=True, metavar="FRAMES...")
+@click.option("--out", "-o", required=True, type=click.Path(file_okay=False),
+              help="Folder for the CSV/JSON track, the mosaic and the trajectory plot.")
+@click.option("--metres-per-pixel", type=click.FloatRange(0.0, min_open=True), default=None,
+              help="Ground size of a pixel, for positions in metres.")
+@click.option("--altitude", type=click.FloatRange(0.0, min_open=True), default=None,
+              help="Camera height above the bottom, metres (with --focal-px).")
+@click.option("--focal-px", type=click.FloatRange(0.0, min_open=True), default=None,
+              help="Focal length in pixels (with --altitude).")
+@click.option("--scale-range", nargs=2, type=float, default=(0.9, 1.1), show_default=True,
+              metavar="LOW HIGH", callback=_range_callback(True),
+              help="Size change between frames (altitude change); LOW = HIGH: known.")
+@click.option("--angle-range", nargs=2, type=float, default=(-20.0, 20.0), show_default=True,
+              metavar="LOW HIGH", callback=_range_callback(False),
+              help="Turn between frames, degrees; LOW = HIGH: known heading change.")
+@click.option("--resume", is_flag=True, help="Continue a run interrupted in the same --out.")
+@click.option("--no-mosaic", is_flag=True, help="Do not build the mosaic.")
+@click.option("--quiet", "-q", is_flag=True,
+              help="No progress bar (shown on stderr only when it is a terminal).")
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON object.")
+def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, angle_range,
+             resume, no_mosaic, quiet, as_json):
+    """Dead reckoning: the camera's path from overlapping frames.
+
+    \b
+    FRAMES is a folder of images (in the order of the timestamps in their
+    names when every name has one, e.g. cam_20240210_134109.500.png, else in
+    natural name order: f2 before f10), one or more video files (read frame
+    by frame, one after the other), or image files in the order given. An earlier frame (a keyframe) is the pattern searched
+    for in each frame; the accumulator peak is the motion. Positions are in pixels of the first
+    frame, or metres with --metres-per-pixel, or --altitude and --focal-px.
+    Writes odometry.csv, summary.json, trajectory.png and mosaic.png to --out.
+
+    \b
+    Exit status: 0 every pair of frames was measured; 1 some frames are
+    flagged (unreadable, or their motion could not be measured: see the
+    CSV's flags column); 2 bad input.
+
+    \b
+    Example:
+      seahough odometry dive/frames --out track --altitude 2.5 --focal-px 800
+    """
+    if metres_per_pixel is not None and (altitude is not None or focal_px is not None):
+        raise click.UsageError("give --metres-per-pixel or --altitude with --focal-px, not both")
+    if (altitude is None) != (focal_px is None):
+        raise click.UsageError("--altitude and --focal-px go together")
+    for f in frames:
+        if not Path(f).exists():
+            raise _Fail(f"{f}: no such file or folder")
+    # looked up when the command runs (tests stand a stub in for the module)
+    from ..motion.odometry import run_odometry
+
+    unit = "m" if (metres_per_pixel is not None or altitude is not None) else "px"
+    t0 = time.perf_counter()
+    result = run_odometry(list(frames), out, metres_per_pixel=metres_per_pixel,
+                          altitude=altitude, focal_px=focal_px, scale_range=scale_range,
+                          angle_range=angle_range, resume=resume,
+                          progress=not quiet and _stderr_is_terminal(), mosaic=not no_mosaic)
+    summ = _odometry_summary(result, time.perf_counter() - t0, unit)
+    status = 1 if summ["flagged_pairs"] else 0
+    if as_json:
+        click.echo(_dumps(summ))
+        return status
+    click.echo(f"frames: {summ['frames']}   flagged pairs: {summ['flagged_pairs']}   "
+               f"distance: {summ['distance']:.2f} {summ['unit']}   "
+               f"time per frame: {summ['time_per_frame_ms']:.0f} ms")
+    n_flagged = 0
+    for r in _odometry_rows(result):
+        if not r.get("flags"):
+            continue
+        n_flagged += 1
+        if n_flagged <= 10:
+            click.echo(f"  flagged: frame {r.get('index')} {r.get('file')}: {r.get('flags')}")
+    if n_flagged > 10:
+        click.echo(f"  ... and {n_flagged - 10} more (see the CSV's flags column)")
+    files = [summ[k] for k in ("csv", "json", "trajectory", "mosaic") if summ[k]]
+    if files:
+        click.echo("wrote: " + ", ".join(files))
+    return status
