@@ -9,9 +9,16 @@ that fails, the full search against the keyframe, then against the previous
 frame, takes over. A pair that still cannot be measured is flagged, never
 silently invented.
 
->>> from seahough import run_odometry                   # doctest: +SKIP
->>> result = run_odometry("dive/frames", "track", altitude=2.5, focal_px=800)  # doctest: +SKIP
->>> result.summary["path_length_m"]                      # doctest: +SKIP
+A dive of 6 simulated frames (a folder, a video or a list of paths work alike):
+
+>>> import tempfile
+>>> from seahough import sim
+>>> frames, truth = sim.sequence(n_frames=6, seed=2, source="procedural")
+>>> with tempfile.TemporaryDirectory() as out:
+...     result = run_odometry(frames, out, metres_per_pixel=0.004, progress=False,
+...                           mosaic=False)
+>>> result.summary["measured_pairs"], round(result.summary["path_length_m"], 2)
+(5, 0.23)
 
 Conventions
 -----------
