@@ -1,0 +1,1 @@
+"""Exact tests of the recognition core, one file a stage."""

@@ -1,0 +1,214 @@
+"""Stage 4 on hand-made pattern points and image segments: the accumulator's
+bins, its votes, and where its peak lies.
+
+The image segments are the pattern's points moved by a known pose (equation
+1: q = t + rho R(phi) p, a gradient angle a becoming a - phi), so every
+pattern point votes for the true cell; a cell counts each pattern point at
+most once, weighted by its weight (here 1/4 each: a full match is 1.0).
+``best_val`` sums 2x2 blocks of translation cells: block (row, col) covers
+translations [tx0 + col * step, tx0 + (col + 2) * step) (and the same in y),
+so one cell of votes makes four equal blocks, those that contain it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from seahough.config import Config
+from seahough.core.accumulator import accumulate, check_ranges, make_bins, planes
+from seahough.core.pattern import PatternFeatures
+from seahough.core.preprocess import compute_gradients
+from seahough.core.segments import Segments
+from seahough.errors import ParameterError
+
+# four points 20 px from the origin, outward gradients, no symmetry under any
+# rotation (their directions are 0, 90, 180 and 315 degrees), so only the
+# true rotation lines all four up
+_R = 20.0
+_DIRS = np.radians([0.0, 90.0, 180.0, 315.0])
+
+
+def _pattern(dirs=_DIRS, radius=_R) -> PatternFeatures:
+    x = radius * np.cos(dirs)
+    y = radius * np.sin(dirs)
+    # the other end of each point's segment: 2 px along the edge
+    x2, y2 = x - 2 * np.sin(dirs), y + 2 * np.cos(dirs)
+    f = lambda a: np.asarray(a, np.float32)
+    w = np.full(len(dirs), 1.0 / len(dirs), np.float32)
+    return PatternFeatures(f(x), f(y), f(dirs), w, f(x2), f(y2), f(x), f(y), f(dirs))
+
+
+def _moved(pf: PatternFeatures, tx, ty, rho=1.0, phi_deg=0.0, invert=False) -> Segments:
+    """The pattern's points as image segments, moved by equation 1."""
+    phi = math.radians(phi_deg)
+    c, s = rho * math.cos(phi), rho * math.sin(phi)
+    mx = lambda x, y: tx + c * x + s * y
+    my = lambda x, y: ty - s * x + c * y
+    x, y = pf.x.astype(float), pf.y.astype(float)
+    ang = np.mod(pf.angle.astype(float) - phi + (math.pi if invert else 0.0), 2 * math.pi)
+    f = lambda a: np.asarray(a, np.float32)
+    n = len(x)
+    return Segments(f(mx(x, y)), f(my(x, y)), f(ang), f(mx(x, y)), f(my(x, y)),
+                    f(mx(pf.x2, pf.y2)), f(my(pf.x2, pf.y2)), np.full(n, 2, np.int32),
+                    np.full(n, 100.0, np.float32), np.arange(n, dtype=np.int32))
+
+
+def _blocks_holding(tx, ty, bins):
+    """The (row, col) blocks of best_val whose 2x2 cells contain (tx, ty)."""
+    cx = int(math.floor((tx - bins.tx0) / bins.step))
+    cy = int(math.floor((ty - bins.ty0) / bins.step))
+    return sorted((r, c) for r in (cy - 1, cy) for c in (cx - 1, cx))
+
+
+def _peak_blocks(v):
+    top = v.best_val.max()
+    return top, sorted(map(tuple, np.argwhere(v.best_val == top).tolist()))
+
+
+# ---------------------------------------------------------------- bins
+def test_make_bins_derived_from_the_pattern_size():
+    pf = _pattern()
+    assert pf.radius == pytest.approx(20.0, abs=1e-5)
+    b = make_bins(pf, (0.8, 1.25), (0.0, 360.0), (0.0, 0.0, 40.0, 30.0), Config())
+    # translation bin 0.17 * rms radius * mid scale (1): 3.4 px (within 2..6)
+    assert b.step == pytest.approx(3.4, abs=1e-5)
+    # kappa = 1.6 * 3.4 / 20 = 0.272 rad: rotation bin capped at 10 degrees
+    # -> 36 slices centred at 5, 15, ..., 355, half width 5 degrees
+    np.testing.assert_allclose(np.degrees(b.angles), np.arange(5.0, 360.0, 10.0), atol=1e-5)
+    assert math.degrees(b.angle_half) == pytest.approx(5.0)
+    # log-scale step capped at 0.15: ln(1.25 / 0.8) = 0.446 needs 3 bins of
+    # 0.1488 = (2/3) ln 1.25, centred at 0.8 * 1.25^(1/3), 0.8 * 1.25, 0.8 * 1.25^(5/3)
+    np.testing.assert_allclose(b.scales, 0.8 * 1.25 ** (np.array([1, 3, 5]) / 3), rtol=1e-9)
+    assert b.log_step == pytest.approx(2 / 3 * math.log(1.25))
+    # cells cover the region from its corner: ceil(40 / 3.4) + 1, ceil(30 / 3.4) + 1
+    assert (b.tx0, b.ty0, b.nx, b.ny) == (0.0, 0.0, 13, 10)
+    assert (b.mode, b.scale_known, b.angle_known) == (0, False, False)     # oriented
+
+
+def test_make_bins_for_known_quantities_and_limits():
+    pf = _pattern()
+    # scale and rotation known: the paper's 2-D case, 1 px bins, one slice
+    # of +-angle_tolerance, point voting
+    b = make_bins(pf, (1.0, 1.0), (30.0, 30.0), (5.0, 6.0, 15.0, 16.0), Config())
+    assert b.step == 1.0 and (b.nx, b.ny) == (11, 11) and (b.tx0, b.ty0) == (5.0, 6.0)
+    assert b.scales.tolist() == [1.0] and np.degrees(b.angles).tolist() == pytest.approx([30.0])
+    assert math.degrees(b.angle_half) == pytest.approx(15.0)
+    assert (b.mode, b.scale_known, b.angle_known) == (1, True, True)
+    # a small pattern (radius 5): step clipped up to 2 px, bins capped
+    small = make_bins(_pattern(radius=5.0), (0.8, 1.25), (0.0, 90.0), (0, 0, 10, 10), Config())
+    assert small.step == 2.0 and small.angles.size == 9 and small.scales.size == 3
+    # a large one (radius 100): step clipped down to 6 px; kappa = 0.096 rad
+    # (5.5 degrees): 66 slices over 360 degrees and ceil(0.446 / 0.096) = 5 scales
+    big = make_bins(_pattern(radius=100.0), (0.8, 1.25), (0.0, 360.0), (0, 0, 10, 10), Config())
+    assert big.step == 6.0 and big.angles.size == 66 and big.scales.size == 5
+    # the config's explicit bins win
+    cfg = Config(translation_bin=2.5, angle_bin=20.0, scale_step=0.2)
+    b = make_bins(pf, (0.8, 1.25), (-30.0, 30.0), (0, 0, 10, 10), cfg)
+    assert b.step == 2.5 and (b.nx, b.ny) == (5, 5)
+    np.testing.assert_allclose(np.degrees(b.angles), [340.0, 360.0, 380.0], atol=1e-6)
+    assert b.scales.size == 3                 # ceil(0.446 / 0.2)
+
+
+def test_check_ranges():
+    assert check_ranges((0.5, 2), (-30, 30)) == ((0.5, 2.0), (330.0, 390.0))
+    assert check_ranges((1, 1), (0, 720)) == ((1.0, 1.0), (0.0, 360.0))     # a full turn
+    assert check_ranges((1, 1), (360, 370)) == ((1.0, 1.0), (0.0, 10.0))
+    assert check_ranges((1, 1), (-360, -350)) == ((1.0, 1.0), (0.0, 10.0))
+    assert check_ranges((0.01, 0.64), (720.5, 721)) == ((0.01, 0.64), (0.5, 1.0))
+
+
+@pytest.mark.parametrize("scale_range, angle_range, match", [
+    ((0.001, 1.0), (0, 10), r"scale_range=\(0\.001, 1\.0\): scales must be in \[0\.01, 100\]"),
+    ((1.0, 101.0), (0, 10), "scale_range.*scales must be in"),
+    ((0.5, 40.0), (0, 10), "scale_range.*more than 64x"),
+    ((2.0, 1.0), (0, 10), "scale_range.*low must be <= high"),
+    ((1.0,), (0, 10), "scale_range.*got 1 values"),
+    ("ab", (0, 10), "scale_range.*pair"),
+    ((1.0, float("nan")), (0, 10), r"scale_range\[1\]=nan: must be finite"),
+    ((1.0, 1.0), (10, 0), "angle_range.*low must be <= high"),
+    ((1.0, 1.0), None, "angle_range=None"),
+    ((1.0, 1.0), (0, True), r"angle_range\[1\]=True: must be a number"),
+])
+def test_check_ranges_errors_name_the_parameter(scale_range, angle_range, match):
+    with pytest.raises(ParameterError, match=match):
+        check_ranges(scale_range, angle_range)
+
+
+# ---------------------------------------------------------------- votes
+def test_known_scale_and_rotation_shift_peaks_at_the_shift():
+    pf = _pattern()
+    tx, ty = 30.3, 27.6
+    seg = _moved(pf, tx, ty)
+    # a stray image segment elsewhere: one pattern point pairs with it
+    extra = _moved(pf, 5.0, 40.0).take(np.array([0]))
+    seg = Segments(*(np.concatenate([getattr(seg, f), getattr(extra, f)])
+                     for f in Segments.__dataclass_fields__))
+    b = make_bins(pf, (1.0, 1.0), (0.0, 0.0), (20.0, 20.0, 40.0, 35.0), Config())
+    v = accumulate(pf, seg, b)
+    assert v.best_val.shape == (b.ny - 1, b.nx - 1) == (15, 20)
+    top, where = _peak_blocks(v)
+    assert top == 1.0
+    # cell (10, 7) from (20, 20): blocks (6..7, 9..10)
+    assert where == _blocks_holding(tx, ty, b) == [(6, 9), (6, 10), (7, 9), (7, 10)]
+    # every other block holds at most the stray point and one of the true ones
+    rest = v.best_val.copy()
+    for r, c in where:
+        rest[r, c] = 0
+    assert rest.max() <= 0.5
+    assert v.scale_angle.tolist() == [[1.0]]
+
+
+@pytest.mark.parametrize("voting", ["oriented", "points", "segments"])
+@pytest.mark.parametrize("k, phi_deg", [(1, 35.0), (2, 125.0), (0, 305.0)])
+def test_scale_and_rotation_peak_at_their_bins(voting, k, phi_deg):
+    # the bins of test_make_bins_derived_from_the_pattern_size (step 3.4,
+    # slices of 10 degrees, scales 0.8 * 1.25^((1 + 2k) / 3)); the pose puts
+    # the origin in the middle of cell (10, 7) and uses a scale and a
+    # rotation at bin centres (slice d is centred on 5 + 10 d degrees)
+    pf = _pattern()
+    cfg = Config(voting=voting)
+    b = make_bins(pf, (0.8, 1.25), (0.0, 360.0), (0.0, 0.0, 68.0, 51.0), cfg)
+    rho = 0.8 * 1.25 ** ((1 + 2 * k) / 3)
+    d = int(phi_deg // 10)
+    tx, ty = 10.5 * 3.4, 7.5 * 3.4
+    v = accumulate(pf, _moved(pf, tx, ty, rho, phi_deg), b)
+    top, where = _peak_blocks(v)
+    assert top == pytest.approx(1.0, abs=1e-6)
+    assert where == _blocks_holding(tx, ty, b) == [(6, 9), (6, 10), (7, 9), (7, 10)]
+    assert {int(v.best_k[r, c]) for r, c in where} == {k}
+    assert {int(v.best_d[r, c]) for r, c in where} == {d}
+    # the scale-rotation plane: its one full cell is (k, d)
+    assert v.scale_angle.shape == (3, 36)
+    assert np.argwhere(v.scale_angle >= top - 1e-6).tolist() == [[k, d]]
+
+
+def test_inverted_contrast_needs_either():
+    pf = _pattern()
+    b = make_bins(pf, (0.8, 1.25), (0.0, 360.0), (0.0, 0.0, 68.0, 51.0), Config())
+    tx, ty = 10.5 * 3.4, 7.5 * 3.4
+    seg = _moved(pf, tx, ty, 1.0, 35.0, invert=True)   # every gradient reversed
+    blocks = tuple(np.array(_blocks_holding(tx, ty, b)).T)
+    # as it is, no pattern point agrees with its own reversed edge there
+    assert accumulate(pf, seg, b).best_val[blocks].max() < 0.5
+    # with either polarity, the reversed copies of all four points do
+    v = accumulate(pf, seg, b, either=True)
+    top, where = _peak_blocks(v)
+    assert top == 1.0 and where == _blocks_holding(tx, ty, b)
+
+
+def test_planes_in_full_resolution_coordinates():
+    pf = _pattern()
+    b = make_bins(pf, (0.8, 1.25), (0.0, 360.0), (0.0, 0.0, 68.0, 51.0), Config())
+    v = accumulate(pf, _moved(pf, 35.7, 25.5, 1.0, 35.0), b)
+    # a working image at half scale: working x -> full (x + 0.5) / 0.5 - 0.5
+    g = compute_gradients(np.zeros((120, 160), np.float32), 0.5)
+    p = planes(v, b, g)
+    # block (r, c) is centred on tx0 + (c + 1) * step
+    assert p.x[9] == pytest.approx((10 * 3.4 + 0.5) * 2 - 0.5)
+    assert p.y[6] == pytest.approx((7 * 3.4 + 0.5) * 2 - 0.5)
+    assert p.xy is v.best_val and p.xy_scale[7, 10] == pytest.approx(1.0)
+    assert p.xy_angle[7, 10] == pytest.approx(35.0, abs=1e-4)
+    assert p.angles.tolist() == pytest.approx(list(np.arange(5.0, 360.0, 10.0)))

@@ -1,0 +1,145 @@
+"""Stage 1 on tiny hand-made images: working scale and Scharr gradients.
+
+OpenCV's Scharr x kernel is [[-3, 0, 3], [-10, 0, 10], [-3, 0, 3]] (applied
+as a correlation: right minus left), y the same transposed (below minus
+above); their weights sum to 16 per side, so a step of 1 grey level gives 16
+(Config.min_gradient's unit). Borders are replicated.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from seahough.config import Config
+from seahough.core.preprocess import choose_factor, compute_gradients, scale_image
+
+
+def _direction(g, y, x):
+    """Gradient direction at a pixel, degrees in [0, 360), y down."""
+    return math.degrees(math.atan2(float(g.gy[y, x]), float(g.gx[y, x]))) % 360.0
+
+
+# ---------------------------------------------------------------- gradients
+def test_vertical_step_of_one_level_gives_16_on_the_two_pixels_beside_it():
+    img = np.zeros((8, 8), np.float32)
+    img[:, 4:] = 1.0
+    g = compute_gradients(img)
+    # columns 3 (last dark) and 4 (first bright) see 0 on one side, 1 on the other
+    expected = np.zeros((8, 8), np.float32)
+    expected[:, 3:5] = 16.0
+    np.testing.assert_array_equal(g.magnitude, expected)
+    np.testing.assert_array_equal(g.gx, expected)            # brighter to the right: +x
+    np.testing.assert_array_equal(g.gy, np.zeros((8, 8)))    # rows all alike (borders too)
+    assert _direction(g, 5, 3) == 0.0
+
+
+@pytest.mark.parametrize("flip, axis, want_deg", [
+    (False, "y", 90.0),     # bright below: the gradient points down (+y)
+    (True, "x", 180.0),     # bright on the left: points to -x
+    (True, "y", 270.0),     # bright above: points up (-y)
+])
+def test_step_direction_follows_the_brighter_side(flip, axis, want_deg):
+    img = np.zeros((8, 8), np.float32)
+    if axis == "x":
+        img[:, :4] = 50.0 if flip else 0.0
+        img[:, 4:] = 0.0 if flip else 50.0
+    else:
+        img[:4, :] = 50.0 if flip else 0.0
+        img[4:, :] = 0.0 if flip else 50.0
+    g = compute_gradients(img)
+    y, x = (5, 3) if axis == "x" else (3, 5)
+    assert g.magnitude[y, x] == 16 * 50
+    assert _direction(g, y, x) == want_deg
+
+
+def test_ramp_interior_border_and_corner():
+    # f(x, y) = 2x + 3y: inside, each side differs by 2 * 2 (x) or 2 * 3 (y)
+    # levels: gx = 16 * 4 = 64, gy = 16 * 6 = 96. On the replicated border a
+    # side sees the same pixel, so the difference halves: gx = 32 at x = 0.
+    yy, xx = np.mgrid[0:6, 0:7].astype(np.float32)
+    g = compute_gradients(2 * xx + 3 * yy)
+    assert g.gx[3, 3] == 64.0 and g.gy[3, 3] == 96.0
+    assert g.magnitude[3, 3] == pytest.approx(math.hypot(64, 96), rel=1e-6)
+    assert _direction(g, 3, 3) == pytest.approx(math.degrees(math.atan2(3, 2)), abs=1e-4)
+    assert g.gx[3, 0] == 32.0 and g.gx[3, 6] == 32.0
+    assert g.gy[0, 3] == 48.0 and g.gy[5, 3] == 48.0
+    assert (g.gx[0, 0], g.gy[0, 0]) == (32.0, 48.0)
+
+
+def test_diagonal_step_points_at_45_degrees():
+    # img = 1 where x + y >= 8. At (4, 4) (on it) and (3, 4) (just off it)
+    # each side of either kernel holds one 0 and two 1s weighted 10 and 3,
+    # or the mirror image: gx = gy = 13. One pixel further (2, 4): only the
+    # corner weight 3 differs.
+    yy, xx = np.mgrid[0:10, 0:10]
+    img = (xx + yy >= 8).astype(np.float32)
+    g = compute_gradients(img)
+    for x, y in ((4, 4), (3, 4), (5, 3)):
+        assert (g.gx[y, x], g.gy[y, x]) == (13.0, 13.0)
+        assert _direction(g, y, x) == pytest.approx(45.0, abs=1e-6)
+    assert (g.gx[4, 2], g.gy[4, 2]) == (3.0, 3.0)
+    assert g.magnitude[4, 6] == 0.0
+
+
+def test_gradients_of_a_downscaled_step_and_the_coordinate_maps():
+    # 8x8, bright from column 4, halved: 2x2 blocks average to a 4x4 image
+    # bright from column 2, whose step (height 100) gives 1600 at columns 1, 2
+    img = np.zeros((8, 8), np.float32)
+    img[:, 4:] = 100.0
+    g = compute_gradients(img, 0.5)
+    assert g.image.shape == (4, 4) and (g.fx, g.fy) == (0.5, 0.5) and g.factor == 0.5
+    assert g.full_shape == (8, 8)
+    np.testing.assert_array_equal(g.magnitude[:, 1:3], np.full((4, 2), 1600.0))
+    assert g.magnitude[:, [0, 3]].max() == 0.0
+    # working pixel 0 covers full pixels 0 and 1: its centre is at 0.5
+    assert g.to_full(0.0, 0.0) == (0.5, 0.5)
+    assert g.to_full(1.5, 3.0) == (3.5, 6.5)    # the step, between columns 3 and 4
+    assert g.to_work(3.5, 6.5) == (1.5, 3.0)
+
+
+# ---------------------------------------------------------------- scale
+def test_scale_image_averages_blocks_and_reports_factors_per_axis():
+    g = np.arange(24, dtype=np.float32).reshape(4, 6)
+    small, fx, fy = scale_image(g, 0.5)
+    # the mean of each 2x2 block: (a + a+1 + a+6 + a+7) / 4 = a + 3.5
+    np.testing.assert_allclose(small, [[3.5, 5.5, 7.5], [15.5, 17.5, 19.5]], atol=1e-5)
+    assert (fx, fy) == (0.5, 0.5)
+    # 5x3 at 0.5: round(2.5) = 2 columns, round(1.5) = 2 rows (half to even),
+    # so the factors actually applied differ from 0.5 and per axis
+    small, fx, fy = scale_image(np.zeros((3, 5), np.float32), 0.5)
+    assert small.shape == (2, 2) and (fx, fy) == (2 / 5, 2 / 3)
+    # never below one pixel
+    small, fx, fy = scale_image(np.zeros((1, 3), np.float32), 0.1)
+    assert small.shape == (1, 1) and (fx, fy) == (1 / 3, 1.0)
+
+
+def test_scale_image_at_full_size_is_the_same_array():
+    g = np.ones((3, 3), np.float32)
+    small, fx, fy = scale_image(g, 0.9995)    # >= 0.999: not resampled
+    assert small is g and (fx, fy) == (1.0, 1.0)
+
+
+@pytest.mark.parametrize("shape, kw, want", [
+    ((480, 640), {}, 0.5),                 # longest side 640 -> 320
+    ((640, 480), {}, 0.5),                 # portrait: the same
+    ((240, 320), {}, 1.0),                 # already the target size
+    ((100, 200), {}, 1.0),                 # never enlarged
+    ((1000, 4000), {}, 0.08),              # 320 / 4000
+    # a 40 px pattern must keep 24 working px: 24 / 40 = 0.6 > 0.5
+    ((480, 640), {"pattern_extent": 40.0}, 0.6),
+    # ... and at scale 0.5 it spans 20 px: 24 / 20 = 1.2, capped at 1
+    ((480, 640), {"pattern_extent": 40.0, "min_scale": 0.5}, 1.0),
+    # a large pattern does not change the target scale: 24 / 200 < 0.5
+    ((480, 640), {"pattern_extent": 200.0}, 0.5),
+])
+def test_choose_factor(shape, kw, want):
+    assert choose_factor(shape, Config(), **kw) == pytest.approx(want, abs=1e-12)
+
+
+def test_choose_factor_settings_of_the_config():
+    assert choose_factor((480, 640), Config(downscale=0.3), pattern_extent=40.0) == 0.3
+    assert choose_factor((480, 640), Config(target_size=160)) == 0.25
+    assert choose_factor((480, 640), Config(min_pattern_size=48), pattern_extent=40.0) == 1.0
