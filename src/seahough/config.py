@@ -16,6 +16,18 @@ MAX_WINDOW = 1001
 VOTING_MODES = ("oriented", "points", "segments")
 
 
+def _check_fields(obj, prefix: str, *, shares=(), counts=(), pixels=(), min_count: int = 0):
+    """ParameterError naming ``prefix.field`` for a share outside [0, 1], a
+    count that is not a whole number >= ``min_count``, or a size in pixels
+    outside [0, 1000]."""
+    for name in shares:
+        number(f"{prefix}.{name}", getattr(obj, name), lo=0.0, hi=1.0)
+    for name in counts:
+        number(f"{prefix}.{name}", getattr(obj, name), lo=min_count, hi=100_000, integer=True)
+    for name in pixels:
+        number(f"{prefix}.{name}", getattr(obj, name), lo=0.0, hi=1000.0)
+
+
 @dataclass(frozen=True)
 class SearchTuning:
     """Fixed choices of the candidate and ranking stages (``Config.search``).
@@ -82,13 +94,10 @@ class SearchTuning:
     band_slack: float = 2.0
 
     def __post_init__(self) -> None:
-        for name in ("peak_radius", "full_treatment", "icp_points", "icp_iterations",
-                     "top_votes", "neighbour_seeds", "min_finish_points"):
-            number(f"Config.search.{name}", getattr(self, name), lo=0, hi=100_000, integer=True)
-        for name in ("overlap", "good_fit", "screen"):
-            number(f"Config.search.{name}", getattr(self, name), lo=0.0, hi=1.0)
-        for name in ("max_radius", "look_radius", "band_slack"):
-            number(f"Config.search.{name}", getattr(self, name), lo=0.0, hi=1000.0)
+        _check_fields(self, "Config.search", shares=("overlap", "good_fit", "screen"),
+                      counts=("peak_radius", "full_treatment", "icp_points", "icp_iterations",
+                              "top_votes", "neighbour_seeds", "min_finish_points"),
+                      pixels=("max_radius", "look_radius", "band_slack"))
 
 
 @dataclass(frozen=True)
@@ -340,3 +349,13 @@ class OdometryTuning:
     max_span: int = 3
     doubtful: float = 0.35
     agree_px: float = 2.0
+
+    def __post_init__(self) -> None:
+        _check_fields(self, "OdometryTuning",
+                      shares=("min_confidence", "min_relative", "min_score", "min_overlap",
+                              "rekey_overlap", "rekey_match", "prior_radius", "full_shift",
+                              "doubtful"),
+                      counts=("prior_bins", "prior_candidates", "max_span"),
+                      pixels=("agree_px",), min_count=1)
+        number("OdometryTuning.prior_angle", self.prior_angle, lo=0.0, hi=180.0)
+        number("OdometryTuning.prior_scale", self.prior_scale, lo=1.0, hi=10.0)

@@ -1,0 +1,42 @@
+"""Every number of a search and of the dead reckoning is validated where it is set."""
+
+import dataclasses
+
+import pytest
+
+import seahough
+from seahough.config import ODOMETRY_CONFIG, OdometryTuning, SearchTuning
+
+
+@pytest.mark.parametrize("field, value", [("screen", 1.5), ("icp_points", 2.5), ("peak_radius", -1),
+                                          ("max_radius", float("nan")), ("overlap", "a lot")])
+def test_bad_search_tuning_names_the_field(field, value):
+    with pytest.raises(seahough.ParameterError, match=rf"Config\.search\.{field}"):
+        SearchTuning(**{field: value})
+
+
+@pytest.mark.parametrize("field, value", [("min_confidence", 2.0), ("prior_bins", 0),
+                                          ("prior_scale", 0.9), ("prior_angle", -1.0),
+                                          ("agree_px", float("inf"))])
+def test_bad_odometry_tuning_names_the_field(field, value):
+    with pytest.raises(seahough.ParameterError, match=rf"OdometryTuning\.{field}"):
+        OdometryTuning(**{field: value})
+
+
+def test_config_search_is_a_search_tuning():
+    with pytest.raises(seahough.ParameterError, match="Config.search"):
+        seahough.Config(search={"screen": 0.0})
+
+
+def test_the_tuning_reaches_the_run(tmp_path):
+    # a policy that refuses every pair: each frame after the first is flagged,
+    # and the summary records the policy that was followed
+    from seahough import sim
+    frames, _ = sim.sequence(n_frames=4, seed=2, source="procedural")
+    strict = OdometryTuning(min_confidence=1.0)
+    res = seahough.run_odometry(frames, tmp_path, tuning=strict, progress=False, mosaic=False)
+    assert res.summary["measured_pairs"] == 0 and res.summary["flagged_pairs"] == 3
+    assert res.summary["settings"]["tuning"] == dataclasses.asdict(strict)
+    assert res.summary["settings"]["config"] == dataclasses.asdict(ODOMETRY_CONFIG)
+    with pytest.raises(seahough.ParameterError, match="tuning"):
+        seahough.run_odometry(frames, tmp_path, tuning={"min_confidence": 1.0}, progress=False)
