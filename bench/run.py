@@ -3,7 +3,7 @@
 Tasks (each reports success rate, median error and median ms per frame for
 seahough and every applicable peer, in the same process on the same cases):
 
-- marker    flat markers (simulate.MARKERS) pasted into real seabed photos,
+- marker    flat markers (sim.MARKERS) pasted into real seabed photos,
             scale 0.6-1.6, any rotation, moderate and hard water, 0-20 % hidden
 - fragment  a 120-200 px seabed patch found in a rotated, rescaled (0.75-1.33),
             degraded view of its photo
@@ -417,7 +417,7 @@ def report_negative(res):
                      rules[k], "-"])
     return "\n".join([
         f"{4 * n} marker scenes (moderate water, the marker task's seeds) and {4 * n} matched "
-        "negatives (simulate.negative_scene: the same background and water without the marker), "
+        "negatives (sim.negative_scene: the same background and water without the marker), "
         "each searched for the marker of its pair. AUC by the rank formula over the number named; "
         "seahough is run with min_score=0, min_confidence=0 to have a best candidate everywhere "
         "(no candidate = 0). False alarms and detections use each method's default rule.\n",
@@ -573,7 +573,7 @@ def report_pair(res):
 
         sh = spec["seahough"]
         parts.append(f"### {spec['label']}\n\n" + _simple_report(recs, targets, (
-            f"{res['n']} pairs of 640x480 frames cut from one real photo (simulate.frame_pair), "
+            f"{res['n']} pairs of 640x480 frames cut from one real photo (sim.frame_pair), "
             f"shift up to {int(100 * PAIR_SHIFT)} % of the frame in x and y, "
             f"rotation {spec['sim']['angle_range']} deg, scale {spec['sim']['scale_range']}, "
             "moderate water drawn separately for each frame. seahough: "
@@ -1108,7 +1108,7 @@ def findings(results) -> str:
         out.append(
             f"- **Ropes.** With the pattern width fixed at the nominal rope width, seahough "
             f"scores only 0.5-0.6 and its offset is biased by ~2 px ({pct(r[ROPE_FIXED].success)} "
-            "success): simulate.rope_scene shades the rope's sides (profile sqrt(1 - 0.75 u^2)), "
+            "success): sim.rope_scene shades the rope's sides (profile sqrt(1 - 0.75 u^2)), "
             "so its gradient maxima lie ~15 % inside the nominal width, and only one border falls "
             "within the 1.5 px match radius. Searching the width (scale 0.6-1.2) fits both "
             f"borders ({pct(r['seahough'].success)}). A dark band along the top of some real "
