@@ -28,7 +28,7 @@ def test_readme_layout_table_lists_every_module():
     assert listed - modules == set(), "the README's layout table names modules that do not exist"
 
 
-def test_core_does_no_io_plotting_or_odometry():
+def test_core_imports_nothing_of_the_layers_above_it():
     # the recognition core takes arrays and returns dataclasses: it never
     # imports the pictures, the CLI, the simulator or the dead reckoning
     for path in (PKG / "core").rglob("*.py"):

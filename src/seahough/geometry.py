@@ -225,8 +225,9 @@ class Similarity:
     turns counter-clockwise as displayed (x right, y down). The same
     transform is the 2x3 matrix ``[[a, b, tx], [-b, a, ty]]`` (as OpenCV's
     ``warpAffine`` takes it) and, on ``z = x + i y``, ``z -> (a - i b) z + t``.
-    This is the only place where the arithmetic of such transforms is
-    written; poses, pair motions and trajectories all use it.
+    This module is the only place where the arithmetic of such transforms
+    is written: poses are Similarity values, and the 2x3 matrices of pair
+    motions and trajectories go through its functions.
 
     Examples
     --------

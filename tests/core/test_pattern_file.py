@@ -62,3 +62,57 @@ def test_bad_pattern_files_say_what_is_wrong(tmp_path):
     (tmp_path / "dir.npz").mkdir()
     with pytest.raises(seahough.SeahoughError, match="dir.npz"):
         seahough.Pattern.rectangle(40, 30).save(tmp_path / "dir.npz")
+
+
+def test_a_dim_pattern_loads_as_it_was_saved(tmp_path):
+    # a frame whose grey levels all lie within 0-1 (a very dark frame, made
+    # searchable by a low min_gradient): to_gray would take such levels for a
+    # 0-1 image and stretch them by 255; a saved pattern comes back as it was
+    cfg = seahough.Config(min_gradient=4)
+    img = np.zeros((120, 160), np.float32)
+    img[30:90, 40:120] = 1.0
+    p = seahough.Pattern.__new__(seahough.Pattern)
+    p._setup(img, None, None, "bright", "frame", None, True, None, cfg)
+    q = seahough.Pattern.load(p.save(tmp_path / "dim.npz"), config=cfg)
+    np.testing.assert_array_equal(q._gray, p._gray)
+    assert float(q._gray.max()) == 1.0
+
+
+@pytest.mark.parametrize("damage", ["truncated", "npy", "kind", "line", "outline", "version"])
+def test_damaged_pattern_files_are_pattern_errors(tmp_path, damage):
+    good = seahough.Pattern.line(120, 8).save(tmp_path / "good.npz")
+    bad = tmp_path / "bad.npz"
+    if damage == "truncated":
+        bad.write_bytes(good.read_bytes()[: good.stat().st_size // 2])
+    elif damage == "npy":
+        with open(bad, "wb") as f:
+            np.save(f, np.zeros(3))
+    else:
+        with np.load(good) as z:
+            data = {k: z[k] for k in z.files}
+        if damage == "kind":
+            data["kind"] = np.array("bogus")
+        elif damage == "line":
+            del data["line"]
+        elif damage == "outline":
+            data["n_outline"] = np.array(5)
+        elif damage == "version":
+            data["version"] = np.array([1, 2])
+        np.savez(bad, **data)
+    with pytest.raises(seahough.PatternError, match="bad.npz: not a saved seahough pattern"):
+        seahough.Pattern.load(bad)
+
+
+def test_one_detector_shared_by_threads_gives_the_same_answers():
+    # nothing of a search is kept on the Detector (nor lost in the pattern's
+    # feature cache, filled concurrently from cold here)
+    from concurrent.futures import ThreadPoolExecutor
+    img, mask = S.marker("board", 120)
+    scenes = [S.marker_scene("board", seed=s, source="procedural")[0] for s in range(6)]
+    expected = [seahough.Detector(seahough.Pattern.from_image(img, mask=mask)).detect(s)
+                for s in scenes]
+    shared = seahough.Detector(seahough.Pattern.from_image(img, mask=mask))
+    with ThreadPoolExecutor(3) as pool:
+        got = list(pool.map(shared.detect, scenes * 2))
+    for a, b in zip(expected * 2, got):
+        _same_detections(a, b)

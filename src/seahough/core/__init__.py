@@ -1,6 +1,7 @@
 """The recognition core: image -> features -> votes -> poses -> detections.
 
-No file I/O, plotting or odometry here: numpy arrays in, dataclasses out.
+Numpy arrays in (or image paths, read through :mod:`seahough.io`), dataclasses
+out; no plotting, odometry or command line here.
 One module a stage, in the order the data flows:
 
 ``preprocess`` (working scale, Scharr gradients) -> ``keypoints`` (edge points,

@@ -45,7 +45,7 @@ class Seed:
     votes: float              # height of its cell
     tx: float                 # the cell's translation (working px)
     ty: float
-    scales: tuple             # scale bins to start from, the best-looking first
+    scale_bins: tuple         # scale bins to start from, the best-looking first
     angle: float              # the cell's rotation (radians)
     is_peak: bool             # a local maximum (else a neighbour of one)
 
@@ -326,7 +326,7 @@ def find_candidates(ctx: SearchContext, votes: Votes) -> list:
     for rank, sd in enumerate(todo):
         if len(out) >= cfg.n_candidates:
             break
-        ks, v, tx, ty, angle = sd.scales, sd.votes, sd.tx, sd.ty, sd.angle
+        ks, v, tx, ty, angle = sd.scale_bins, sd.votes, sd.tx, sd.ty, sd.angle
         lead = tune.screen * max((c.work_score for c in out), default=0.0)
         start = Pose.from_params(tx, ty, float(bins.scales[ks[0]]), angle)
         if rank < tune.full_treatment and cfg.refine and len(ks) > 1:
