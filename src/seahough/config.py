@@ -95,9 +95,11 @@ class SearchTuning:
 
     def __post_init__(self) -> None:
         _check_fields(self, "Config.search", shares=("overlap", "good_fit", "screen"),
-                      counts=("peak_radius", "full_treatment", "icp_points", "icp_iterations",
-                              "top_votes", "neighbour_seeds", "min_finish_points"),
+                      counts=("full_treatment", "top_votes", "neighbour_seeds",
+                              "min_finish_points"),
                       pixels=("max_radius", "look_radius", "band_slack"))
+        _check_fields(self, "Config.search", counts=("peak_radius", "icp_points",
+                                                     "icp_iterations"), min_count=1)
 
 
 @dataclass(frozen=True)

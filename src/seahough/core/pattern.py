@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import functools
 import math
+import zipfile
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -25,6 +27,8 @@ from .keypoints import edge_points_near
 from .preprocess import choose_factor, compute_gradients
 
 POLARITIES = ("bright", "dark", "either")
+#: What a pattern can be (``Pattern.kind``).
+KINDS = ("image", "frame", "rectangle", "line", "polygon", "circle", "ring")
 #: Primitive shapes are drawn at most this many pixels a side.
 MAX_SHAPE_SIDE = 8192
 #: The origin may lie outside the pattern image, by at most this many times
@@ -104,7 +108,13 @@ class Pattern:
 
     def __init__(self, image, mask=None, origin=None, *, polarity="bright", kind="image",
                  outline=None, closed=True, edge_mask=None, config: Config | None = None):
-        gray = to_gray(image, name="pattern")
+        self._setup(to_gray(image, name="pattern"), mask, origin, polarity, kind, outline,
+                    closed, edge_mask, config)
+
+    def _setup(self, gray, mask, origin, polarity, kind, outline, closed, edge_mask, config):
+        """Build the pattern from a checked float32 grey image (levels 0-255)."""
+        if kind not in KINDS:
+            raise ParameterError(f"kind={kind!r}: must be one of {', '.join(KINDS)}")
         self._gray = gray
         self.image = np.clip(gray, 0, 255).astype(np.uint8)
         h, w = gray.shape
@@ -138,7 +148,7 @@ class Pattern:
         self.is_frame = kind == "frame"
         #: A crop of a clear photo, searched through water: blurred first
         #: (Config.pattern_blur).
-        self.from_photo = kind == "image"
+        self.is_photo = kind == "image"
         if outline is None:
             outline = self._outline_from_mask()
         self.outline = [np.asarray(o, float).reshape(-1, 2) for o in outline]
@@ -323,7 +333,8 @@ class Pattern:
         config = config or Config()
         key = self._features_key(factor, config)
         if key not in self._cache:
-            self._cache[key] = self._compute_features(factor, config)
+            # (two threads may both compute it: the same features, the first kept)
+            self._cache.setdefault(key, self._compute_features(factor, config))
         return self._cache[key]
 
     def _features_key(self, factor: float, config: Config) -> tuple:
@@ -332,7 +343,7 @@ class Pattern:
                 config.n_verify_points, config.min_gradient, config.segment_steps,
                 config.segment_angle_tol, config.max_segments, config.equalize,
                 config.local_contrast, config.local_window,
-                config.pattern_blur if self.from_photo else 0.0)
+                config.pattern_blur if self.is_photo else 0.0)
 
     def finish_points(self, factor: float, config: Config | None = None):
         """``(vx, vy, vangle)``: the points that refine a pose found at working
@@ -389,7 +400,7 @@ class Pattern:
         gray = self._gray
         if self.polarity == "dark":
             gray = 255.0 - gray
-        if self.from_photo and config.pattern_blur > 0:
+        if self.is_photo and config.pattern_blur > 0:
             # a crop of a clear photo, searched through water: its finest
             # texture would not be there to match (Config.pattern_blur)
             gray = cv2.GaussianBlur(np.ascontiguousarray(gray, np.float32), (0, 0),
@@ -476,26 +487,45 @@ class Pattern:
         return path
 
     @classmethod
-    def load(cls, path) -> "Pattern":
-        """A pattern written by :meth:`save` (see there)."""
+    def load(cls, path, *, config: Config | None = None) -> "Pattern":
+        """A pattern written by :meth:`save` (see there). ``config``: the
+        configuration it will be searched with (a frame's features are
+        prepared for it at once, as :meth:`from_frame` does)."""
         path = Path(path)
+        bad = f"{path}: not a saved seahough pattern"
         try:
-            with np.load(path, allow_pickle=False) as z:
-                data = {k: z[k] for k in z.files}
+            z = np.load(path, allow_pickle=False)
         except FileNotFoundError:
             raise ImageReadError(f"{path}: no such file") from None
-        except (OSError, ValueError, EOFError) as e:
-            raise PatternError(f"{path}: not a saved seahough pattern ({e})") from None
-        need = {"version", "gray", "origin", "polarity", "kind", "closed", "n_outline"}
-        if not need <= set(data) or int(data["version"]) != cls.FILE_VERSION:
-            raise PatternError(f"{path}: not a saved seahough pattern (version "
-                               f"{cls.FILE_VERSION} expected)")
-        outline = [data[f"outline_{i}"] for i in range(int(data["n_outline"]))]
-        p = cls(data["gray"], data.get("mask"), tuple(data["origin"]),
-                polarity=str(data["polarity"]), kind=str(data["kind"]), outline=outline,
-                closed=bool(data["closed"]), edge_mask=data.get("edge_mask"))
-        if "line" in data:
-            p.line_length, p.line_width = (float(v) for v in data["line"])
+        except IsADirectoryError:
+            raise ImageReadError(f"{path}: is a folder") from None
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as e:
+            raise PatternError(f"{bad} ({e})") from None
+        if not isinstance(z, np.lib.npyio.NpzFile):
+            raise PatternError(f"{bad} (a single array, not a .npz archive)")
+        try:
+            with z:
+                data = {k: z[k] for k in z.files}
+            if int(data["version"]) != cls.FILE_VERSION:
+                raise ValueError(f"format version {int(data['version'])}, "
+                                 f"{cls.FILE_VERSION} expected")
+            kind = str(data["kind"])
+            if kind == "line" and "line" not in data:
+                raise ValueError("a line without its length and width")
+            gray = np.ascontiguousarray(data["gray"], np.float32)
+            if gray.ndim != 2 or gray.dtype != np.float32 or not np.isfinite(gray).all():
+                raise ValueError("its image is not a finite grey image")
+            mask = data.get("mask")
+            outline = [data[f"outline_{i}"] for i in range(int(data["n_outline"]))]
+            p = cls.__new__(cls)
+            p._setup(gray, None if mask is None else mask.astype(bool),
+                     tuple(float(v) for v in data["origin"]), str(data["polarity"]), kind,
+                     outline, bool(data["closed"]), data.get("edge_mask"), config)
+            if kind == "line":
+                p.line_length, p.line_width = (float(v) for v in data["line"])
+        except (KeyError, TypeError, ValueError, IndexError, zipfile.BadZipFile,
+                zlib.error, EOFError, OSError) as e:
+            raise PatternError(f"{bad} ({e})") from None
         return p
 
     def __repr__(self) -> str:
