@@ -552,8 +552,9 @@ import sys, time
 import seahough.motion.odometry as O
 from seahough.io.frames import FrameReader
 raw = FrameReader.raw
+delay = float(sys.argv[3]) if len(sys.argv) > 3 else 0.15
 def slow(self, i):
-    time.sleep(0.15)
+    time.sleep(delay)
     return raw(self, i)
 FrameReader.raw = slow
 O.run_odometry(sys.argv[1], sys.argv[2], progress=False, mosaic=False)

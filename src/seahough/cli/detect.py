@@ -12,6 +12,7 @@ from ..config import Config
 from ..core.detector import FLAG_ALONG_LINE, Detector
 from ..errors import SeahoughError
 from ..geometry import format_angle
+from ..io.frames import printable
 from ._common import (_Output, _dumps, _out_dir, _problem, _progress, _range_callback, _table,
                       parse_pattern)
 
@@ -126,7 +127,7 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
             img = read_image(name, max_pixels=cfg.max_pixels)
             res = detector.search(img)
         except SeahoughError as e:
-            say.error(f"{name}: {_problem(e, name)}")
+            say.error(f"{printable(name)}: {printable(_problem(e, name))}")
             n_bad += 1
             continue
         ms = 1000.0 * (time.perf_counter() - t0)
@@ -164,14 +165,15 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
             rec.update(written)
             say(_dumps(rec))
         else:
+            # (a name's control characters escaped: a newline must not split the table)
             if dets:
-                say(f"{name}  {w}x{h}  {len(dets)} found  ({ms:.0f} ms)")
+                say(f"{printable(name)}  {w}x{h}  {len(dets)} found  ({ms:.0f} ms)")
                 for line in _detection_lines(dets):
                     say(line)
             else:
-                say(f"{name}  {w}x{h}  not found{why}  ({ms:.0f} ms)")
+                say(f"{printable(name)}  {w}x{h}  not found{why}  ({ms:.0f} ms)")
             if written and not quiet:
-                say("  wrote " + ", ".join(written.values()))
+                say("  wrote " + ", ".join(printable(v) for v in written.values()))
     if bar is not None:
         bar.close()
     if n_bad:

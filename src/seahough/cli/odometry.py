@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 import numpy as np
 
+from ..io.frames import printable
 from ._common import _Fail, _dumps, _range_callback, _stderr_is_terminal
 
 
@@ -83,7 +84,8 @@ def _odometry_summary(result, wall_s: float, unit: str) -> dict:
 @click.option("--angle-range", nargs=2, type=float, default=(-20.0, 20.0), show_default=True,
               metavar="LOW HIGH", callback=_range_callback(False),
               help="Turn between frames, degrees; LOW = HIGH: known heading change.")
-@click.option("--resume", is_flag=True, help="Continue a run interrupted in the same --out.")
+@click.option("--resume", is_flag=True, help="Continue a run interrupted in the same --out "
+              "(the same frames and settings only).")
 @click.option("--no-mosaic", is_flag=True, help="Do not build the mosaic.")
 @click.option("--quiet", "-q", is_flag=True,
               help="No progress bar (shown on stderr only when it is a terminal).")
@@ -99,7 +101,8 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
     by frame, one after the other), or image files in the order given. An earlier frame (a keyframe) is the pattern searched
     for in each frame; the accumulator peak is the motion. Positions are in pixels of the first
     frame, or metres with --metres-per-pixel, or --altitude and --focal-px.
-    Writes odometry.csv, summary.json, trajectory.png and mosaic.png to --out.
+    Writes odometry.csv, run.json, summary.json, trajectory.png and mosaic.png
+    to --out (one run at a time: another run on the same --out is refused).
 
     \b
     Exit status: 0 every pair of frames was measured; 1 some frames are
@@ -116,7 +119,7 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
         raise click.UsageError("--altitude and --focal-px go together")
     for f in frames:
         if not Path(f).exists():
-            raise _Fail(f"{f}: no such file or folder")
+            raise _Fail(f"{printable(f)}: no such file or folder")
     # looked up when the command runs (tests stand a stub in for the module)
     from ..motion.odometry import run_odometry
 
@@ -140,10 +143,11 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
             continue
         n_flagged += 1
         if n_flagged <= 10:
-            click.echo(f"  flagged: frame {r.get('index')} {r.get('file')}: {r.get('flags')}")
+            click.echo(f"  flagged: frame {r.get('index')} {printable(r.get('file'))}: "
+                       f"{printable(r.get('flags'))}")
     if n_flagged > 10:
         click.echo(f"  ... and {n_flagged - 10} more (see the CSV's flags column)")
     files = [summ[k] for k in ("csv", "json", "trajectory", "mosaic") if summ[k]]
     if files:
-        click.echo("wrote: " + ", ".join(files))
+        click.echo("wrote: " + ", ".join(printable(f) for f in files))
     return status

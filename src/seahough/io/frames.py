@@ -2,22 +2,62 @@
 
 >>> time_from_name("dive_20130701_134008.633.jpg")
 1372686008.633
+
+Nothing of a sequence is dropped without a word: every entry of a folder
+whose name has an image extension is a frame (a broken link, a link loop or
+a folder of that name is one that cannot be read), and a video lists every
+frame its header counts, those the decoder cannot give included (see
+:func:`list_frames`).
 """
 
 from __future__ import annotations
 
 import calendar
+import errno
 import os
 import re
+import stat
+import zlib
 from pathlib import Path
 
 import cv2
 import numpy as np
 
-from ..errors import ImageError, ParameterError
+from ..errors import ImageError, ImageReadError, ParameterError
 from .images import read_image
 
-__all__ = ["list_frames", "time_from_name", "FrameReader", "IMAGE_EXTENSIONS", "VIDEO_EXTENSIONS"]
+__all__ = ["list_frames", "time_from_name", "FrameReader", "printable", "IMAGE_EXTENSIONS",
+           "VIDEO_EXTENSIONS"]
+
+# FFmpeg prints what it thinks of damaged video data ("[mjpeg @ 0x...] bad vlc")
+# on the process's stderr, where it would reach the user as stray lines: the
+# frames it cannot decode are flagged in the results instead. OpenCV reads this
+# setting when it first uses FFmpeg in the process (-8: AV_LOG_QUIET); a value
+# the user set is kept. No file descriptor is touched.
+os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
+
+#: Frames that a video's header counts but the decoder cannot give are listed
+#: too; a header claiming more than this many of them is refused as damaged.
+MAX_MISSING_VIDEO_FRAMES = 1_000_000
+_GIVE_UP_GRABS = 64        # failed grabs in a row taken for the end of a video
+_SAMPLE = 4096             # bytes of each of the 3 blocks a file's fingerprint reads
+_SAMPLE_ROWS = 16          # pixel rows a decoded frame's fingerprint reads
+_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029\ud800-\udfff]")
+
+
+def printable(name) -> str:
+    r"""``name`` with control characters (newlines, tabs, terminal escapes,
+    undecodable bytes) escaped as Python writes them, for one-line output.
+
+    Examples
+    --------
+    >>> print(printable("dive/frame\n7.png"))
+    dive/frame\n7.png
+    >>> printable("plain name.png")
+    'plain name.png'
+    """
+    return _CONTROL.sub(lambda m: repr(m.group())[1:-1], str(name))
+
 
 IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".pgm", ".ppm", ".pnm",
                     ".webp", ".jp2")
@@ -92,17 +132,29 @@ def _split_video_ref(s: str):
 
 
 def _video_frames(path: Path) -> list[str]:
+    """One entry per frame of the video: as many as the decoder gives, and at
+    least as many as its header counts (a damaged stretch is read past; the
+    frames it loses are listed too, and are unreadable when read)."""
     cap = cv2.VideoCapture(os.fspath(path))
     if not cap.isOpened():
         raise ParameterError(f"{path}: cannot open the video")
     try:
-        n = 0
-        while cap.grab():
-            n += 1
+        expected = max(int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0), 0)
+        n = good = failed = 0
+        while failed < _GIVE_UP_GRABS:
+            if cap.grab():
+                # the frames the decoder could not give before this one keep their places
+                n, good, failed = n + failed + 1, good + 1, 0
+            else:
+                failed += 1
     finally:
         cap.release()
-    if n == 0:
+    if good == 0:
         raise ParameterError(f"{path}: the video holds no frame OpenCV can decode")
+    n = max(n, expected)
+    if n - good > MAX_MISSING_VIDEO_FRAMES:
+        raise ParameterError(f"{path}: the header counts {expected} frames but only {good} "
+                             "decode: a damaged header?")
     return [f"{path}#{i}" for i in range(n)]
 
 
@@ -119,6 +171,14 @@ def list_frames(frames) -> list:
         folder is read as that folder; each video in a list is replaced
         by its frames, in place (several videos: one after the other, in
         the order given). Arrays in a list are taken as frames as they are.
+
+    Every entry of a folder whose name ends with an image extension is a
+    frame, whatever it is: a broken link, a link loop, a folder or a FIFO so
+    named cannot be read and gets an ``unreadable`` row in a dead-reckoning
+    run (names starting with ``.`` are left out). A video's frames are as
+    many as its header counts (``CAP_PROP_FRAME_COUNT``), or as the decoder
+    gives if more: frames the decoder cannot give (damaged data) keep their
+    place and cannot be read, so that a damaged video never looks complete.
 
     Raises
     ------
@@ -139,7 +199,7 @@ def list_frames(frames) -> list:
     if len(items) == 1 and isinstance(items[0], (str, os.PathLike)):
         p = Path(items[0])
         if p.is_dir():
-            files = [f for f in p.iterdir() if f.is_file() and not f.name.startswith(".")
+            files = [f for f in p.iterdir() if not f.name.startswith(".")
                      and f.suffix.lower() in IMAGE_EXTENSIONS]
             if not files:
                 raise ParameterError(f"{p}: no image files ({', '.join(IMAGE_EXTENSIONS)}) "
@@ -175,9 +235,63 @@ def list_frames(frames) -> list:
     return out
 
 
+def _entry(path: str) -> os.stat_result:
+    """The file's status; an ImageReadError saying why an entry is no image
+    file (a broken link, a link loop, a folder, a FIFO...)."""
+    try:
+        st = os.stat(path)
+    except OSError as e:
+        if os.path.islink(path):
+            if e.errno == errno.ELOOP:
+                raise ImageReadError(f"{path}: symbolic link loop") from None
+            raise ImageReadError(f"{path}: broken symbolic link (to "
+                                 f"{printable(os.readlink(path))})") from None
+        if isinstance(e, FileNotFoundError):
+            raise ImageReadError(f"{path}: no such file") from None
+        raise ImageReadError(f"{path}: cannot read ({e.strerror or e})") from None
+    if stat.S_ISDIR(st.st_mode):
+        raise ImageReadError(f"{path}: is a folder, not an image")
+    if not stat.S_ISREG(st.st_mode):
+        raise ImageReadError(f"{path}: not a regular file (a FIFO, socket or device)")
+    return st
+
+
+def _pixels_fingerprint(a) -> str:
+    """``p`` and a CRC-32 of the array's shape, dtype and 16 rows spread over it."""
+    try:
+        a = np.asarray(a)
+        crc = zlib.crc32(repr((a.shape, a.dtype.str)).encode())
+        if a.ndim and a.shape[0]:
+            for r in np.unique(np.linspace(0, a.shape[0] - 1, _SAMPLE_ROWS).astype(int)):
+                crc = zlib.crc32(np.ascontiguousarray(a[r]), crc)
+    except (TypeError, ValueError):    # not an array of numbers: nothing to compare
+        return ""
+    return f"p{crc:08x}"
+
+
+def _file_fingerprint(path: str) -> str:
+    """The size and a CRC-32 of 3 blocks of 4 kB (start, middle, end) of a
+    file; "" when it is no readable regular file."""
+    try:
+        size = _entry(path).st_size
+        with open(path, "rb") as f:
+            if size <= 3 * _SAMPLE:
+                crc = zlib.crc32(f.read())
+            else:
+                crc = zlib.crc32(f.read(_SAMPLE))
+                f.seek(size // 2 - _SAMPLE // 2)
+                crc = zlib.crc32(f.read(_SAMPLE), crc)
+                f.seek(size - _SAMPLE)
+                crc = zlib.crc32(f.read(_SAMPLE), crc)
+    except (OSError, ImageError):
+        return ""
+    return f"s{size:x}-{crc:08x}"
+
+
 class FrameReader:
     """Reads the listed frames by index (videos sequentially, reopened when
-    asked for an earlier frame)."""
+    asked for an earlier frame; a frame the decoder cannot give is an
+    ImageError, and the frames after it are read on)."""
 
     def __init__(self, items: list, max_pixels: int):
         self.items = items
@@ -190,6 +304,15 @@ class FrameReader:
     def name(self, i: int) -> str:
         it = self.items[i]
         return f"frame_{i:05d}" if isinstance(it, np.ndarray) else str(it)
+
+    def is_array(self, i: int) -> bool:
+        """Is frame ``i`` an array given as it is (not read from a file)?"""
+        return isinstance(self.items[i], np.ndarray)
+
+    def is_video(self, i: int) -> bool:
+        """Is frame ``i`` a frame of a video (``"video.mp4#<k>"``)?"""
+        it = self.items[i]
+        return not isinstance(it, np.ndarray) and _split_video_ref(str(it)) is not None
 
     def time(self, i: int) -> float | None:
         it = self.items[i]
@@ -208,6 +331,25 @@ class FrameReader:
             cap.release()
         return self._fps[path]
 
+    def fingerprint(self, i: int, image=None) -> str:
+        """What frame ``i`` holds, in a few characters, to tell a frame from
+        another of the same name (``--resume``): for a file, its size and a
+        CRC-32 of 12 kB of it (start, middle, end; a few tens of
+        microseconds, the frame not decoded); for an array, or a video frame
+        given decoded as ``image``, a CRC-32 of 16 rows of its pixels. ""
+        when there is nothing to read.
+
+        >>> reader = FrameReader([np.zeros((8, 8)), np.ones((8, 8))], 10 ** 6)
+        >>> reader.fingerprint(0) == reader.fingerprint(1), len(reader.fingerprint(0))
+        (False, 9)
+        """
+        it = self.items[i]
+        if isinstance(it, np.ndarray):
+            return _pixels_fingerprint(it)
+        if _split_video_ref(str(it)) is not None:
+            return "" if image is None else _pixels_fingerprint(image)
+        return _file_fingerprint(os.fspath(it))
+
     def raw(self, i: int) -> np.ndarray:
         """The frame as stored (any depth/channels); raises ImageError."""
         it = self.items[i]
@@ -215,6 +357,7 @@ class FrameReader:
             return it
         ref = _split_video_ref(str(it))
         if ref is None:
+            _entry(os.fspath(it))
             return read_image(it, max_pixels=self.max_pixels)
         path, k = ref
         if self._cap is None or self._cap_path != path or k < self._cap_next:
@@ -222,15 +365,15 @@ class FrameReader:
             self._cap = cv2.VideoCapture(path)
             self._cap_path, self._cap_next = path, 0
             if not self._cap.isOpened():
-                raise ImageError(f"{path}: cannot open the video")
+                raise ImageReadError(f"{path}: cannot open the video")
         while self._cap_next < k:
-            if not self._cap.grab():
-                raise ImageError(f"{path}: frame {k} is past the end of the video")
+            self._cap.grab()        # a frame that cannot be decoded still takes its place
             self._cap_next += 1
         ok, img = self._cap.read()
         self._cap_next += 1
         if not ok or img is None:
-            raise ImageError(f"{path}: cannot decode frame {k}")
+            raise ImageReadError(f"{it}: frame {k} cannot be decoded (damaged or missing "
+                                 "data)")
         return img
 
     def close(self):

@@ -4,6 +4,7 @@
 - :mod:`.odometry`: :func:`run_odometry`, the keyframe / prior / fallback policy
 - :mod:`.state`: what the next frame needs (rebuilt from the rows on resume)
 - :mod:`.track`: the CSV rows, the summary, :class:`OdometryResult`
+- :mod:`.runfiles`: the output folder: one run at a time, what ``resume`` checks
 - :mod:`.mosaic`: frames placed by the trajectory
 """
 

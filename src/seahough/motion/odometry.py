@@ -44,23 +44,24 @@ import os
 import sys
 import time
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from .._validate import pair
 from ..config import ODOMETRY_CONFIG, Config, OdometryTuning
 from ..core.accumulator import check_ranges
-from ..errors import ImageError, ParameterError, SeahoughError
+from ..errors import ImageError, ParameterError, SeahoughError, WriteError
 from ..geometry import (Similarity, angle_difference, apply_matrix, compose, frame_centre,
                         invert_matrix, matrix_to_pose, overlap, shift_origin, wrap_angle)
 from ..io.frames import FrameReader, list_frames
 from ..io.images import to_gray
 from .mosaic import build_mosaic
 from .state import Frame, State, advance, power, ref_cum
-from .pair import content_box, frame_factor, frame_features, search_pair
-from .track import (CSV_BASE, CSV_METRIC, CSV_MORE, OdometryResult, Totals, closing_enumerate,
-                    plot_track, resolve_metres_per_pixel, summarise,
+from .pair import check_motion_size, content_box, frame_factor, frame_features, search_pair
+from .runfiles import (RunFolder, check_kept_row, open_track, run_settings, settings_hash,
+                       write_output, write_row)
+from .track import (CSV_BASE, CSV_CHECK, CSV_METRIC, CSV_MORE, OdometryResult, Totals,
+                    closing_enumerate, plot_track, resolve_metres_per_pixel, summarise,
                     iter_odometry_csv, metric_position, pose_fields, row_to_csv)
 
 __all__ = ["run_odometry", "ODOMETRY_CONFIG", "OdometryTuning"]
@@ -221,7 +222,10 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
         must have the first readable frame's size).
     out_dir : path
         Created if needed; receives ``odometry.csv`` (written and flushed
-        row by row), ``summary.json``, ``mosaic.png`` and ``trajectory.png``.
+        row by row), ``run.json`` (the settings), then ``summary.json``,
+        ``mosaic.png`` and ``trajectory.png`` when the run ends (those of an
+        earlier run are removed when it starts). One run at a time: the
+        folder is locked while a run writes it.
     metres_per_pixel : float, optional
         Ground size of a frame-0 pixel; or give ``altitude`` (m) and
         ``focal_px`` (focal length in pixels) of a down-looking camera:
@@ -236,7 +240,11 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
         Continue from an ``odometry.csv`` already in ``out_dir``: frames
         measured there are kept, the state (poses, keyframe, velocity) is
         rebuilt from them, and the result is the same as an uninterrupted
-        run. Without it, an existing CSV is overwritten.
+        run. Only the same run is continued: the same settings (ranges,
+        metres per pixel, config, tuning), and the same frames (names
+        compared as full paths, contents by fingerprint), else a
+        ParameterError naming what differs. Without it, an existing CSV is
+        overwritten (not a read-only one: WriteError).
     progress : bool
         A tqdm progress bar on stderr (shown only when stderr is a terminal).
     mosaic : bool
@@ -254,6 +262,14 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
         Memory does not grow with the number of frames: each row goes to
         the CSV when finished, the summary is counted as they go, and the
         result's ``rows`` are read back from the CSV when first asked for.
+
+    Raises
+    ------
+    ParameterError
+        Bad parameters; ``resume`` of another run.
+    WriteError
+        ``out_dir`` cannot be created or written, another run is writing
+        it, or its CSV is read-only.
 
     Notes
     -----
@@ -291,7 +307,9 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     scene's look changed). Flags (a frame with flags is a pair that could
     not be measured or a frame that could not be read):
 
-    - ``unreadable: <reason>``: missing, corrupt, truncated, wrong size;
+    - ``unreadable: <reason>``: missing, corrupt, truncated, wrong size,
+      too small to measure (a side under 64 px), a broken link or a folder
+      among the frames, a video frame the decoder cannot give;
       the row has no pose, the state is kept and the next readable frame is
       measured against the keyframe across the gap.
     - ``no_motion`` / ``low_confidence`` / ``little_overlap``: no step
@@ -313,11 +331,23 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     mpp = resolve_metres_per_pixel(metres_per_pixel, altitude, focal_px)
     items = list_frames(frames)
     reader = FrameReader(items, cfg.max_pixels)
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    csv_path = out / "odometry.csv"
-    json_path = out / "summary.json"
-    columns = CSV_BASE + (CSV_METRIC if mpp else []) + CSV_MORE
+    settings = run_settings(scale_range, angle_range, mpp, cfg, tuning)
+    digest = settings_hash(settings)
+    columns = CSV_BASE + (CSV_METRIC if mpp else []) + CSV_MORE + CSV_CHECK
+    with RunFolder(out_dir) as run:
+        try:
+            return _run(run, reader, items, columns, settings, digest, resume, scale_range,
+                        angle_range, mpp, cfg, tuning, progress, mosaic, t_start,
+                        (metres_per_pixel, altitude, focal_px))
+        finally:
+            reader.close()
+
+
+def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, resume,
+         scale_range, angle_range, mpp, cfg, tuning, progress, mosaic, t_start, given):
+    """run_odometry in its locked output folder."""
+    out, csv_path, json_path = run.path, run.csv, run.json
+    run.check_writable(csv_path)
 
     # Rows are not kept in memory (a long survey would grow without bound): each one
     # is written to the CSV as it is finished, the summary is counted as they go
@@ -335,10 +365,12 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
             frames_mem[i] = Frame(i, searcher.crop(gray_i))
         return frames_mem[i]
 
-    # ---- resume: rebuild the state from the rows kept, rewriting them (drops a
-    # cut-off line) into a new file, read and written one row at a time
+    # ---- resume: check that the rows kept are this run's (settings, frames) and
+    # rebuild the state from them, rewriting them (drops a cut-off line) into a new
+    # file, read and written one row at a time
     n_resumed = 0
     if resume and csv_path.exists():
+        old_cwd = run.check_settings(settings, digest)
         part = csv_path.with_name(csv_path.name + ".part")
         try:
             with open(part, "w", newline="") as fnew:
@@ -350,11 +382,7 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
                         n_old = pos + 1 + sum(1 for _ in old)
                         raise ParameterError(f"{csv_path} holds {n_old} frames, more than the "
                                              f"{len(items)} given: not the same sequence")
-                    if r["index"] != pos or r["file"] != reader.name(pos):
-                        raise ParameterError(f"{csv_path}: row {pos} is frame {r['index']} "
-                                             f"{r['file']!r}, but frame {pos} here is "
-                                             f"{reader.name(pos)!r}: not the same sequence "
-                                             "(run without resume)")
+                    check_kept_row(csv_path, pos, r, reader, digest, old_cwd)
                     r["_cum"] = (None if r["matrix"] is None
                                  else np.asarray(r["matrix"], float).reshape(2, 3))
                     if r["status"] != "unreadable" and st.shape is None:
@@ -371,16 +399,24 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
                     writer.writerow(row_to_csv(r, columns))
                     totals.add(r)
                     n_resumed += 1
-        except BaseException:
+            os.replace(part, csv_path)
+        except BaseException as e:
             part.unlink(missing_ok=True)
+            if isinstance(e, OSError) and not isinstance(e, SeahoughError):
+                raise WriteError(f"{csv_path}: cannot rewrite it to resume "
+                                 f"({e.strerror or e})") from None
             raise
-        os.replace(part, csv_path)
-        fcsv = open(csv_path, "a", newline="")
+        if run.read_settings() is None:
+            run.write_settings(settings, digest)
+        run.clear_outputs()
+        fcsv = open_track(csv_path, "a")
     else:
-        fcsv = open(csv_path, "w", newline="")
-        csv.DictWriter(fcsv, fieldnames=columns).writeheader()
+        run.clear_outputs()
+        run.write_settings(settings, digest)
+        fcsv = open_track(csv_path, "w")
     writer = csv.DictWriter(fcsv, fieldnames=columns, extrasaction="ignore")
-    fcsv.flush()
+    if fcsv.tell() == 0:                    # a new file: the header first
+        write_row(fcsv, csv_path, writer.writeheader)
 
     if st.shape is not None:
         searcher = _Searcher(st.box, scale_range, angle_range, cfg, tuning)
@@ -400,14 +436,20 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
                    "y": None, "heading": None, "scale": None, "confidence": None, "flags": "",
                    "dx": None, "dy": None, "rotation": None, "scale_change": None,
                    "score": None, "overlap": None, "ref": None, "method": "", "status": "",
-                   "matrix": None, "pair_matrix": None, "_cum": None}
+                   "matrix": None, "pair_matrix": None, "_cum": None,
+                   "frame_hash": None, "settings_hash": digest}
             gray = None
             try:
-                gray = to_gray(reader.raw(i), max_pixels=cfg.max_pixels)
+                raw = reader.raw(i)
+                row["frame_hash"] = reader.fingerprint(i, raw)
+                gray = to_gray(raw, max_pixels=cfg.max_pixels)
+                check_motion_size(gray.shape, "frame")
                 if st.shape is not None and gray.shape != st.shape:
                     raise ImageError(f"size {gray.shape[1]}x{gray.shape[0]} differs from the "
                                      f"first frame's {st.shape[1]}x{st.shape[0]}")
             except (ImageError, OSError) as e:
+                if row["frame_hash"] is None:
+                    row["frame_hash"] = reader.fingerprint(i)
                 msg = " ".join(str(e).split())
                 if not isinstance(items[i], np.ndarray):
                     msg = msg.replace(str(items[i]) + ": ", "")
@@ -434,8 +476,7 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
             for k in list(frames_mem):
                 if k not in (st.key, st.prev, st.meas):
                     del frames_mem[k]
-            writer.writerow(row_to_csv(row, columns))
-            fcsv.flush()
+            write_row(fcsv, csv_path, lambda: writer.writerow(row_to_csv(row, columns)))
             totals.add(row)
             if bar is not None:
                 bar.update(1)
@@ -449,17 +490,23 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     # ---- outputs (from the CSV, one row at a time)
     mosaic_path = None
     if mosaic and st.shape is not None:
-        mosaic_path = build_mosaic(csv_path, reader, st.shape, out / "mosaic.png")
+        mosaic_path = write_output(out / "mosaic.png", lambda: build_mosaic(
+            csv_path, reader, st.shape, out / "mosaic.png"))
     reader.close()
-    trajectory_path = plot_track(csv_path, out / "trajectory.png", bool(mpp))
+    trajectory_path = write_output(out / "trajectory.png", lambda: plot_track(
+        csv_path, out / "trajectory.png", bool(mpp)))
     summary = summarise(totals, items, mpp, scale_range, angle_range, cfg, tuning, n_resumed,
-                       time.perf_counter() - t_start, metres_per_pixel, altitude, focal_px)
+                        time.perf_counter() - t_start, *given)
     summary["outputs"] = {"csv": str(csv_path), "json": str(json_path),
                           "mosaic": None if mosaic_path is None else str(mosaic_path),
                           "trajectory": str(trajectory_path)}
-    with open(json_path, "w") as f:
-        json.dump(summary, f, indent=2)
-        f.write("\n")
+
+    def write_summary():
+        with open(json_path, "w") as f:
+            json.dump(summary, f, indent=2)
+            f.write("\n")
+
+    write_output(json_path, write_summary)
     return OdometryResult(None, summary, csv_path, json_path, mosaic_path, trajectory_path)
 
 

@@ -19,12 +19,16 @@ from ..errors import ParameterError
 from ..geometry import angle_difference, apply_matrix, frame_centre, invert_matrix, matrix_to_pose
 
 __all__ = ["OdometryResult", "read_odometry_csv", "iter_odometry_csv", "CSV_BASE", "CSV_METRIC",
-           "CSV_MORE"]
+           "CSV_MORE", "CSV_CHECK"]
 
 CSV_BASE = ["index", "file", "time", "x", "y", "heading", "scale", "confidence", "flags"]
 CSV_METRIC = ["x_m", "y_m"]
 CSV_MORE = ["dx", "dy", "rotation", "scale_change", "score", "overlap", "ref", "method",
              "status", "ms", "matrix", "pair_matrix"]
+#: What ``--resume`` checks a row against: the frame's content fingerprint
+#: (:meth:`seahough.io.frames.FrameReader.fingerprint`) and the hash of the
+#: settings the run was made with (:func:`seahough.motion.runfiles.run_settings`).
+CSV_CHECK = ["frame_hash", "settings_hash"]
 
 
 class OdometryResult:
@@ -43,7 +47,9 @@ class OdometryResult:
         ``"previous"``: see :func:`run_odometry`'s notes), ``status``
         (``"origin"``, ``"measured"``, ``"assumed"``, ``"unreadable"``),
         ``ms``, ``matrix`` and
-        ``pair_matrix`` (2x3 as 6 floats, row-major). The run does not keep
+        ``pair_matrix`` (2x3 as 6 floats, row-major), ``frame_hash`` and
+        ``settings_hash`` (what ``resume`` checks: the frame's content and
+        the run's settings, as short strings). The run does not keep
         the rows in memory (a survey of 100,000 photos would hold about
         250 MB of them): they are read from ``csv_path`` by
         :func:`read_odometry_csv` when first asked for, then kept.
@@ -140,12 +146,24 @@ def iter_odometry_csv(path):
     """The rows of :func:`read_odometry_csv` one at a time (the file is not read whole)."""
     with open(path, newline="") as f:
         def complete_lines():
+            # only the file's last line can be a row cut short (no line end): a
+            # line before it may end inside a quoted name holding "\r" or "\n"
+            last = None
             for line in f:
-                if not line.endswith("\n"):
-                    return          # the last row was cut short
-                yield line
+                if last is not None:
+                    yield last
+                last = line
+            if last is not None and last.endswith("\n"):
+                yield last
 
-        for rec in csv.DictReader(complete_lines()):
+        records = csv.DictReader(complete_lines())
+        while True:
+            try:
+                rec = next(records)
+            except StopIteration:
+                return
+            except csv.Error:
+                return      # a quoted field cut short, a NUL byte: stop here
             try:
                 row = {"index": int(rec["index"]), "file": rec["file"]}
                 for k in _FLOAT_COLS:
@@ -163,6 +181,8 @@ def iter_odometry_csv(path):
                 row["pair_matrix"] = None if pm is None else pm.ravel().tolist()
                 if row["status"] != "unreadable" and m is None:
                     raise ValueError("no matrix")
+                for k in CSV_CHECK:             # None: a CSV of a seahough without them
+                    row[k] = rec.get(k)
             except (KeyError, ValueError, TypeError, AttributeError):
                 return  # a truncated or foreign line: stop here
             yield row
