@@ -171,7 +171,10 @@ class Config:
     translation_bin, angle_bin, scale_step : float or None
         Accumulator bin sizes (working px, at least 0.25; degrees, at least
         0.1; log-scale step, at least 0.001). ``None`` derives them from the
-        pattern's size.
+        pattern's size. A search whose bins, ranges and counts would make
+        the accumulator too large or the voting too long (over the limits of
+        :mod:`seahough.core.accumulator`: about 10 s on a 640x480 photo) is
+        refused with a ParameterError naming the fields to change.
     angle_tolerance : float
         Largest difference (degrees) between an image edge direction and the
         rotated pattern edge direction for a pair to vote when the rotation is

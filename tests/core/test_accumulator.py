@@ -212,3 +212,85 @@ def test_planes_in_full_resolution_coordinates():
     assert p.xy is v.best_val and p.xy_scale[7, 10] == pytest.approx(1.0)
     assert p.xy_angle[7, 10] == pytest.approx(35.0, abs=1e-4)
     assert p.angles.tolist() == pytest.approx(list(np.arange(5.0, 360.0, 10.0)))
+
+
+# ---------------------------------------------------------------- size limits
+def test_accumulator_over_its_limits_is_refused_naming_the_bins():
+    from seahough.core import accumulator as A
+
+    pf = _pattern()
+    region = (0.0, 0.0, 639.0, 479.0)                 # a 640x480 working image
+    # the finest documented bins: 2560 x 1920 translations x 1387 scales per
+    # slice (6.8e9 cells, 54 GB) and 3600 slices
+    fine = Config(translation_bin=0.25, angle_bin=0.1, scale_step=0.001)
+    with pytest.raises(ParameterError) as e:
+        make_bins(pf, (0.5, 2.0), (0.0, 360.0), region, fine)
+    msg = str(e.value)
+    assert msg.startswith("an accumulator of 2.4e+13 cells (2557 x 1917 translations x 1387 "
+                          "scales x 3600 rotations; 6.8e+09 cells, 54.4 GB, a rotation slice) "
+                          "is over the limit of 2.5e+08 cells a slice and 4e+09 cells in all: "
+                          "coarsen Config.translation_bin (0.25), Config.angle_bin (0.1) or "
+                          "Config.scale_step (0.001), or narrow scale_range"), msg
+    # only the time: the fields not set are named with the bins derived for them
+    with pytest.raises(ParameterError, match=r"^an accumulator of 1\.3e\+11 cells .* over the "
+                       r"limit of 4e\+09 cells in all: coarsen Config\.translation_bin \(derived: "
+                       r"3\.4 px\), Config\.angle_bin \(0\.1\) or Config\.scale_step \(0\.001\)"):
+        make_bins(pf, (0.5, 2.0), (0.0, 360.0), region, Config(angle_bin=0.1, scale_step=0.001))
+    # ... which a narrower search brings back under the limit
+    assert make_bins(pf, (0.9, 1.1), (0.0, 10.0), region,
+                     Config(angle_bin=0.1, scale_step=0.001)).angles.size == 100
+    # the limit on all cells grows with the searched area (so that default
+    # bins search any image), the one on a slice does not
+    big = (0.0, 0.0, 16000.0, 12000.0)
+    b = make_bins(pf, (0.5, 2.0), (0.0, 360.0), big, Config())
+    cells = b.nx * b.ny * b.scales.size * b.angles.size
+    assert cells > A.MAX_CELLS and b.nx * b.ny * b.scales.size < A.MAX_SLICE_CELLS
+    with pytest.raises(ParameterError, match="cells a slice: coarsen Config.translation_bin"):
+        make_bins(pf, (0.5, 2.0), (0.0, 360.0), (0.0, 0.0, 40000.0, 30000.0), Config())
+
+
+def test_default_bins_stay_far_under_the_limits():
+    """Every pattern size, scale span and angle range with the default bins,
+    over a 640x480 working region: at most a fifteenth of each limit (the
+    most: a scale range of 1.56-100 and a large pattern, 144 x 139 bins)."""
+    from seahough.config import MOTION_CONFIG
+    from seahough.core import accumulator as A
+
+    most = np.zeros(3)
+    for r in np.geomspace(2.0, 2000.0, 40):
+        pf = _pattern(radius=float(r))
+        for sr in ((1, 1), (0.9, 1.1), (0.5, 2.0), (0.1, 6.4), (1.5625, 100.0), (0.01, 0.64)):
+            for ar in ((0, 0), (-25, 25), (0, 180), (0, 360)):
+                b = make_bins(pf, sr, ar, (0.0, 0.0, 639.0, 479.0), Config())
+                ns, na, nt = b.scales.size, b.angles.size, b.nx * b.ny
+                votes = MOTION_CONFIG.n_pattern_points * Config().n_keypoints * (ns + na / 64)
+                most = np.maximum(most, [nt * ns, nt * ns * na, votes])
+    assert (most * 15 < [A.MAX_SLICE_CELLS, A.MAX_CELLS, A.MAX_VOTES]).all(), most
+
+
+def test_too_many_votes_are_refused_naming_the_counts():
+    # 4 pattern points x 1000 segments x (139 scales + 36 / 64): 5.6e5 votes;
+    # refused when the limit is lower than that
+    from seahough.core import accumulator as A
+
+    pf = _pattern()
+    b = make_bins(pf, (0.5, 2.0), (0.0, 360.0), (0.0, 0.0, 68.0, 51.0),
+                  Config(scale_step=0.01, n_pattern_points=500))
+    seg = _moved(pf, 30.0, 20.0)
+    many = seg.take(np.arange(1000) % len(seg))
+    accumulate(pf, many, b)                           # under the limit
+    old, A.MAX_VOTES = A.MAX_VOTES, 5e5
+    try:
+        with pytest.raises(ParameterError, match=r"^voting 4 pattern points x 1000 image segments "
+                           r"over 139 scales and 36 rotations \(5\.6e\+05 votes\) is over the "
+                           r"limit of 5e\+05: lower "
+                           r"Config\.n_pattern_points \(500\) or Config\.n_keypoints \(1200\), "
+                           r"coarsen Config\.scale_step \(0\.01\), or narrow scale_range"):
+            accumulate(pf, many, b)
+        # each pattern point counts twice with either polarity
+        A.MAX_VOTES = 1e6
+        accumulate(pf, many, b)
+        with pytest.raises(ParameterError, match="^voting 8 pattern points"):
+            accumulate(pf, many, b, either=True)
+    finally:
+        A.MAX_VOTES = old

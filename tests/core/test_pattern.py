@@ -216,3 +216,29 @@ def test_bad_mask_and_origin():
             Pattern(img, origin=origin)
     # 10 sizes of 33 px around the image: -330 is allowed
     assert Pattern(img, origin=(-330.0, 16.0)).origin == (-330.0, 16.0)
+
+
+# ---------------------------------------------------------------- sub-pixel sizes
+# A shape narrower than a pixel has no two borders to find: a rectangle 1e-9 px
+# wide was drawn as a line about 1.8 px wide (integrated level above the
+# background / 200: 1.77 at 1e-9, 1.84 at 0.25, 2.0 at 0.5, 2.43 at 1.0) and searched.
+@pytest.mark.parametrize("make, match", [
+    (lambda: Pattern.rectangle(1e-9, 50), r"^width=1e-09: must be at least 1 px"),
+    (lambda: Pattern.rectangle(50, 0.5), r"^height=0.5: must be at least 1 px"),
+    (lambda: Pattern.line(100, 0.25), r"^width=0.25: must be at least 1 px"),
+    (lambda: Pattern.line(0.5, 0.2), r"^length=0.5: must be at least 1 px"),
+    (lambda: Pattern.circle(0.9), r"^radius=0.9: must be at least 1 px"),
+    (lambda: Pattern.circle(20, 0.5), r"^inner_radius=0.5: must be at least 1 px"),
+    (lambda: Pattern.circle(20, 19.5), r"^inner_radius=19.5: .*ring .*at least 1 px thick"),
+    (lambda: Pattern.polygon([(0, 0), (100, 0), (0, 0.1)]),
+     r"^polygon .*0.1 px across at its narrowest: must be at least 1 px"),
+])
+def test_sub_pixel_shape_sizes_are_refused_naming_the_parameter(make, match):
+    with pytest.raises(ParameterError, match=match):
+        make()
+
+
+def test_one_pixel_sizes_are_drawn_and_searched():
+    for p in (Pattern.rectangle(1, 50), Pattern.line(100, 1), Pattern.circle(20, 19),
+              Pattern.polygon([(0, 0), (60, 0), (0, 1.5)])):
+        assert p.features(1.0).x.size > 0, p

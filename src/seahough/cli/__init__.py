@@ -45,6 +45,21 @@ cli.add_command(simulate.simulate)
 cli.add_command(demo.demo)
 
 
+def _interrupted(exc: BaseException) -> bool:
+    """Is a KeyboardInterrupt among the causes and contexts of ``exc``?"""
+    seen = set()
+    todo = [exc]
+    while todo:
+        e = todo.pop()
+        if e is None or id(e) in seen:
+            continue
+        if isinstance(e, KeyboardInterrupt):
+            return True
+        seen.add(id(e))
+        todo += [e.__cause__, e.__context__]
+    return False
+
+
 def main(argv=None) -> None:
     """Entry point of the ``seahough`` command (and ``python -m seahough``).
 
@@ -73,6 +88,15 @@ def main(argv=None) -> None:
         _err(msg)
         rv = e.exit_code
     except (click.exceptions.Abort, KeyboardInterrupt):
+        _err("interrupted")
+        rv = 130
+    except SystemError as e:
+        # Ctrl-C inside a compiled (Numba) kernel: the KeyboardInterrupt is
+        # raised while its results are converted, and surfaces as a
+        # SystemError ("returned a result with an exception set") caused by it
+        if not _interrupted(e):
+            raise
+        click.echo(err=True)  # as click does for a KeyboardInterrupt (after the ^C)
         _err("interrupted")
         rv = 130
     except (_Fail, SeahoughError) as e:

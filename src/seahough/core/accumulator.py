@@ -43,6 +43,7 @@ class Bins:
     mode: int
     scale_known: bool
     angle_known: bool
+    config: Config | None = None  # what the bins were made from (for messages)
 
 
 @dataclass
@@ -96,6 +97,23 @@ class AccumulatorPlanes:
 SCALE_LIMITS = (0.01, 100.0)
 
 
+#: The most cells one rotation slice of the accumulator may hold: the slice
+#: and its vote stamps take 8 bytes a cell (2.5e8 cells: 2 GB). Default bins
+#: over a 640x480 region: at most 2.2e6.
+MAX_SLICE_CELLS = 2.5e8
+#: The most cells of the whole accumulator (each slice is cleared and reduced
+#: once) per REFERENCE_AREA working px^2 of searched region: 3.8e9 cells took
+#: 6.2-8.4 s (1.6-2.2 ns a cell, one core of a 2-core AMD EPYC). Default bins
+#: over a 640x480 region: at most 1.8e8 (a 64x scale range and a large pattern).
+MAX_CELLS = 4e9
+REFERENCE_AREA = 640.0 * 480.0
+#: The most votes of one search: pattern points x image segments x (scales,
+#: or 1 in segment voting, + rotation slices / 64 for the direction bins each
+#: slice looks at). 9.8e8 took 10.2 s, 2.3e8 1.5 s (6-12 ns a vote). Default
+#: counts: at most 4.3e7 (256 pattern points, 1200 segments, 139 scales).
+MAX_VOTES = 8e8
+
+
 def check_ranges(scale_range, angle_range):
     """Validated ``(scale_range, angle_range)``; raises ParameterError.
 
@@ -129,7 +147,8 @@ def make_bins(pf: PatternFeatures, scale_range, angle_range, region, config: Con
     """Bin sizes from the pattern's size, the ranges and the config.
 
     ``region`` is (x0, y0, x1, y1) in working pixels: where the pattern
-    origin may lie.
+    origin may lie. A ParameterError refuses an accumulator over the limits
+    (:data:`MAX_SLICE_CELLS`, :data:`MAX_CELLS`), naming what to change.
     """
     (s0, s1), (a0, a1) = check_ranges(scale_range, angle_range)
     r = max(pf.radius, 2.0)
@@ -170,8 +189,91 @@ def make_bins(pf: PatternFeatures, scale_range, angle_range, region, config: Con
     mode = _MODES[config.voting]
     if angle_known:
         mode = K.MODE_POINTS  # a known rotation is used as given
-    return Bins(scales, angles, half, log0, lstep, float(x0), float(y0), step, nx, ny, mode,
-                scale_known, angle_known)
+    bins = Bins(scales, angles, half, log0, lstep, float(x0), float(y0), step, nx, ny, mode,
+                scale_known, angle_known, config)
+    _check_size(bins, (x1 - x0) * (y1 - y0), config)
+    return bins
+
+
+def _bin_fields(bins: Bins, config: Config, names) -> str:
+    """``"Config.translation_bin (derived: 3.4 px), Config.angle_bin (0.1) or
+    ..."``: the fields ``names`` of ``config`` with their values, or the
+    value ``bins`` derived for a field left None."""
+    used = {"translation_bin": f"{bins.step:.3g} px", "angle_bin":
+            f"{math.degrees(2 * bins.angle_half):.3g} degrees", "scale_step": f"{bins.log_step:.3g}"}
+    out = []
+    for n in names:
+        v = getattr(config, n)
+        out.append(f"Config.{n} ({v:g})" if v is not None else f"Config.{n} (derived: {used[n]})")
+    return ", ".join(out[:-1]) + " or " + out[-1] if len(out) > 1 else out[0]
+
+
+def _check_size(bins: Bins, area: float, config: Config) -> None:
+    """Refuse an accumulator too large to hold or to sweep.
+
+    Parameters
+    ----------
+    bins : Bins
+        The grid.
+    area : float
+        Area of the searched region, working px^2.
+    config : Config
+        What the bins were made from (named in the message).
+
+    Raises
+    ------
+    ParameterError
+        Over :data:`MAX_SLICE_CELLS` cells a rotation slice, or over
+        :data:`MAX_CELLS` cells in all per :data:`REFERENCE_AREA` of region;
+        the message names the bins to coarsen and the ranges to narrow.
+    """
+    ns, na = bins.scales.size, bins.angles.size
+    per_slice = float(bins.nx) * bins.ny * ns
+    cells = per_slice * na
+    limit = MAX_CELLS * max(1.0, area / REFERENCE_AREA)
+    over, names = [], ["translation_bin", "scale_step"]
+    if per_slice > MAX_SLICE_CELLS:
+        over.append(f"{MAX_SLICE_CELLS:.2g} cells a slice")
+    if cells > limit:
+        over.append(f"{limit:.2g} cells in all")
+        names.insert(1, "angle_bin")
+    if not over:
+        return
+    raise ParameterError(
+        f"an accumulator of {cells:.2g} cells ({bins.nx} x {bins.ny} translations x {ns} scales "
+        f"x {na} rotations; {per_slice:.2g} cells, {per_slice * 8 / 1e9:.3g} GB, a rotation "
+        f"slice) is over the limit of {' and '.join(over)}: coarsen "
+        f"{_bin_fields(bins, config, names)}, or narrow scale_range, angle_range or "
+        "search_region (or search a smaller image: Config.downscale)")
+
+
+def _check_votes(n_points: int, n_segments: int, bins: Bins) -> None:
+    """Refuse a vote that would take too long.
+
+    Parameters
+    ----------
+    n_points, n_segments : int
+        Pattern points (counting both polarities) and image segments.
+    bins : Bins
+        The grid: each pair votes once per scale (once in segment voting),
+        and each rotation slice looks at the segments of its direction bins.
+
+    Raises
+    ------
+    ParameterError
+        Over :data:`MAX_VOTES`; the message names the counts to lower.
+    """
+    config = bins.config or Config()
+    ns, na = bins.scales.size, bins.angles.size
+    votes = float(n_points) * n_segments * (
+        (1 if bins.mode == K.MODE_SEGMENTS else ns) + na / N_ANGLE_BINS)
+    if votes > MAX_VOTES:
+        raise ParameterError(
+            f"voting {n_points} pattern points x {n_segments} image segments over {ns} scales "
+            f"and {na} rotations ({votes:.2g} votes) is over the limit of {MAX_VOTES:.2g}: "
+            f"lower Config.n_pattern_points ({config.n_pattern_points}) or Config.n_keypoints "
+            f"({config.n_keypoints}), coarsen {_bin_fields(bins, config, ('scale_step',))}, "
+            "or narrow scale_range")
 
 
 class Votes(NamedTuple):
@@ -185,7 +287,8 @@ class Votes(NamedTuple):
 
 def accumulate(pf: PatternFeatures, seg: Segments, bins: Bins, either: bool = False) -> Votes:
     """Vote every pattern point / image segment pair into the accumulator of
-    ``bins``; returns its reductions as :class:`Votes`.
+    ``bins``; returns its reductions as :class:`Votes`. A ParameterError
+    refuses, before voting, more than :data:`MAX_VOTES` votes.
 
     Examples
     --------
@@ -214,6 +317,7 @@ def accumulate(pf: PatternFeatures, seg: Segments, bins: Bins, either: bool = Fa
         px, py, p2x, p2y = (np.concatenate([v, v]) for v in (px, py, p2x, p2y))
         pa = np.concatenate([pa, (pa + np.float32(math.pi)) % np.float32(2 * math.pi)])
         pw = np.concatenate([pw, pw])
+    _check_votes(px.size, len(seg), bins)
     abin = 2 * math.pi / N_ANGLE_BINS
     b = np.minimum((seg.angle / abin).astype(np.int64), N_ANGLE_BINS - 1)
     order = np.argsort(b, kind="stable")

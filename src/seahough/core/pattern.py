@@ -31,6 +31,9 @@ POLARITIES = ("bright", "dark", "either")
 KINDS = ("image", "frame", "rectangle", "line", "polygon", "circle", "ring")
 #: Primitive shapes are drawn at most this many pixels a side.
 MAX_SHAPE_SIDE = 8192
+#: ... and at least this many pixels across: anything thinner is drawn alike
+#: (a rectangle 1e-9 px wide came out as a line about 1.8 px wide).
+MIN_SHAPE_SIZE = 1.0
 #: The origin may lie outside the pattern image, by at most this many times
 #: the image's longer side.
 MAX_ORIGIN_OUTSIDE = 10
@@ -64,9 +67,12 @@ class PatternFeatures:
 
 
 def _check_positive(**kw):
-    """Sizes of a primitive shape: positive and at most MAX_SHAPE_SIDE px."""
+    """Sizes of a primitive shape: positive, at least MIN_SHAPE_SIZE and at
+    most MAX_SHAPE_SIDE px."""
     for k, v in kw.items():
-        number(k, v, lo=0.0, lo_open=True, hi=MAX_SHAPE_SIDE)
+        if number(k, v, lo=0.0, lo_open=True, hi=MAX_SHAPE_SIDE) < MIN_SHAPE_SIZE:
+            raise ParameterError(f"{k}={v!r}: must be at least {MIN_SHAPE_SIZE:g} px (a shape "
+                                 "thinner than a pixel has no two borders to find)")
 
 
 def _check_polarity(polarity, allowed=POLARITIES):
@@ -251,6 +257,10 @@ class Pattern:
         area = 0.5 * abs(np.sum(pts[:, 0] * np.roll(pts[:, 1], -1) - np.roll(pts[:, 0], -1) * pts[:, 1]))
         if area < 4.0:
             raise PatternError("polygon encloses (almost) no area")
+        across = min(cv2.minAreaRect(pts.astype(np.float32))[1])  # its narrower side
+        if across < MIN_SHAPE_SIZE:
+            raise ParameterError(f"polygon points: {across:.3g} px across at its narrowest: must "
+                                 f"be at least {MIN_SHAPE_SIZE:g} px")
         w, h = pts.max(axis=0)
         return cls._shape([pts], w, h, margin, polarity, "polygon")
 
@@ -265,6 +275,9 @@ class Pattern:
             _check_positive(inner_radius=inner_radius)
             if not float(inner_radius) < r:
                 raise ParameterError(f"inner_radius={inner_radius!r} must be smaller than radius={r}")
+            if r - float(inner_radius) < MIN_SHAPE_SIZE:
+                raise ParameterError(f"inner_radius={inner_radius!r}: the ring (radius={r:g}) must "
+                                     f"be at least {MIN_SHAPE_SIZE:g} px thick")
             kind = "ring"
         t = np.linspace(0, 2 * np.pi, max(32, int(2 * np.pi * r)), endpoint=False)
         outer = np.stack([r + r * np.cos(t), r + r * np.sin(t)], 1)

@@ -1,15 +1,20 @@
-"""The hot loops, compiled with Numba (``cache=True``), one module a stage.
-Everything else in the package is numpy/OpenCV.
+"""The hot loops, compiled with Numba (``cache=True`` wherever a cache can be
+written), one module a stage. Everything else in the package is numpy/OpenCV.
 
 - :mod:`.edges`: edge points, segment tracing, spreading points
 - :mod:`.voting`: the accumulator's votes and its local maxima
 - :mod:`.matching`: point matching, snapping, ICP
 - :mod:`._common`: the direction test they share, and the conventions
+- :mod:`._cache`: where the compiled kernels are cached (a private temporary
+  folder when neither the package folder nor HOME can be written)
 """
 
-from .edges import edge_points, spread_points, trace_segments
-from .matching import icp, match_points, snap_points
-from .voting import MODE_ORIENTED, MODE_POINTS, MODE_SEGMENTS, local_maxima, vote
+from ._cache import kernel_cache
+
+with kernel_cache():
+    from .edges import edge_points, spread_points, trace_segments
+    from .matching import icp, match_points, snap_points
+    from .voting import MODE_ORIENTED, MODE_POINTS, MODE_SEGMENTS, local_maxima, vote
 
 __all__ = ["edge_points", "spread_points", "trace_segments", "icp", "match_points",
            "snap_points", "MODE_ORIENTED", "MODE_POINTS", "MODE_SEGMENTS", "local_maxima", "vote"]
