@@ -44,6 +44,37 @@ def corner_error(matrix_found, matrix_true, shape, symmetric: bool = False) -> f
     return float(np.max(np.hypot(*(f - t).T)))
 
 
+#: The uid and gid of user ``nobody`` (Debian, and most Linux systems).
+NOBODY = 65534
+
+
+def as_unprivileged(env: dict | None = None, probe: list | None = None) -> list:
+    """The command prefix that runs a child process as user ``nobody``, who
+    can write only where anyone may (a test's permission bits then stop it,
+    as they stop a service user; they do not stop root). It keeps only the
+    capability to read files (CAP_DAC_READ_SEARCH), so the interpreter and
+    the venv are readable wherever they live (e.g. under /root). ``[]`` when
+    the tests already run as a normal user; the test is skipped, with the
+    reason, when this environment cannot switch user."""
+    import shutil
+    import subprocess
+    if os.name != "posix":
+        pytest.skip("user switching is POSIX only")
+    if os.geteuid() != 0:
+        return []            # a normal user is stopped by the permission bits already
+    setpriv = shutil.which("setpriv")
+    if setpriv is None:
+        pytest.skip("running as root without setpriv: cannot drop to user nobody")
+    prefix = [setpriv, f"--reuid={NOBODY}", f"--regid={NOBODY}", "--clear-groups",
+              "--inh-caps=+dac_read_search", "--ambient-caps=+dac_read_search"]
+    check = subprocess.run(prefix + (probe or [sys.executable, "-c", "import numpy, numba, cv2"]),
+                           env=env, capture_output=True, text=True, timeout=120)
+    if check.returncode != 0:
+        pytest.skip("this environment cannot run the interpreter as user nobody "
+                    f"({check.stderr.strip().splitlines()[-1:] or check.returncode})")
+    return prefix
+
+
 def seahough_command() -> Path:
     """The installed ``seahough`` console script beside ``sys.executable``.
 

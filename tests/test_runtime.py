@@ -23,10 +23,9 @@ from seahough import Config, Detector, Pattern
 from seahough.cli import cli, main
 from seahough.errors import ParameterError
 
-from conftest import seahough_command
+from conftest import NOBODY, as_unprivileged, seahough_command
 
 SRC = Path(seahough.__file__).resolve().parent
-NOBODY = 65534
 
 _DETECT = """
 import numpy as np, seahough
@@ -51,23 +50,9 @@ def _scene(seed: int = 0) -> np.ndarray:
 def _as_unprivileged(env: dict) -> list[str]:
     """The command prefix that runs a child as a user who can write nowhere
     but ``env["TMPDIR"]``; skips the test when this environment cannot."""
-    if os.name != "posix":
-        pytest.skip("user switching is POSIX only")
-    if os.geteuid() != 0:
-        return []            # a normal user cannot write a 0555 folder anyway
-    setpriv = shutil.which("setpriv")
-    if setpriv is None:
-        pytest.skip("running as root without setpriv: cannot drop to user nobody")
-    # nobody, keeping only CAP_DAC_READ_SEARCH: it reads the interpreter and the
-    # venv wherever they are (e.g. under /root), and writes only where nobody may
-    prefix = [setpriv, f"--reuid={NOBODY}", f"--regid={NOBODY}", "--clear-groups",
-              "--inh-caps=+dac_read_search", "--ambient-caps=+dac_read_search"]
-    probe = subprocess.run(prefix + [sys.executable, "-c", "import numpy, numba, cv2, click"],
-                           env=env, capture_output=True, text=True, timeout=120)
-    if probe.returncode != 0:
-        pytest.skip("this environment cannot run the interpreter as user nobody "
-                    f"({probe.stderr.strip().splitlines()[-1:] or probe.returncode})")
-    os.chown(env["TMPDIR"], NOBODY, NOBODY)
+    prefix = as_unprivileged(env, [sys.executable, "-c", "import numpy, numba, cv2, click"])
+    if prefix:
+        os.chown(env["TMPDIR"], NOBODY, NOBODY)
     return prefix
 
 
