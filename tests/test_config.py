@@ -40,3 +40,22 @@ def test_the_tuning_reaches_the_run(tmp_path):
     assert res.summary["settings"]["config"] == dataclasses.asdict(ODOMETRY_CONFIG)
     with pytest.raises(seahough.ParameterError, match="tuning"):
         seahough.run_odometry(frames, tmp_path, tuning={"min_confidence": 1.0}, progress=False)
+
+
+def test_config_max_memory_mb_reaches_every_reader(tmp_path):
+    # a plain 2000x1500 PNG needs far more than 1 MB to read and search: refused
+    # from its header by the detector, estimate_motion and the dead reckoning
+    import cv2
+    import numpy as np
+    path = tmp_path / "big.png"
+    cv2.imwrite(str(path), np.zeros((1500, 2000), np.uint8))
+    small = seahough.Config(max_memory_mb=1)
+    with pytest.raises(seahough.ImageSizeError, match="big.png.*max_memory_mb"):
+        seahough.Detector(seahough.Pattern.rectangle(40, 30), config=small).detect(path)
+    with pytest.raises(seahough.ImageSizeError, match="big.png.*max_memory_mb"):
+        seahough.estimate_motion(path, path, config=small)
+    res = seahough.run_odometry([path, path], tmp_path / "o", config=small, progress=False,
+                                mosaic=False)
+    assert all("max_memory_mb" in r["flags"] for r in res.rows)
+    with pytest.raises(seahough.ParameterError, match="max_memory_mb"):
+        seahough.Config(max_memory_mb=0)

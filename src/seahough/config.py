@@ -15,6 +15,9 @@ MAX_WINDOW = 1001
 
 VOTING_MODES = ("oriented", "points", "segments")
 
+#: Default of Config.max_memory_mb and of read_image's limit (MB).
+MAX_MEMORY_MB = 4096.0
+
 
 def _check_fields(obj, prefix: str, *, shares=(), counts=(), pixels=(), min_count: int = 0):
     """ParameterError naming ``prefix.field`` for a share outside [0, 1], a
@@ -191,6 +194,10 @@ class Config:
         edge points (point-to-edge distances), finishing at full resolution.
     max_pixels : int
         Images with more pixels are refused (decompression-bomb guard).
+    max_memory_mb : float
+        Image files whose reading and search would need more memory than
+        this (MB, as :func:`seahough.io.images.memory_needed` models it from
+        the header) are refused before decoding.
     search : SearchTuning
         Fixed choices of the candidate and ranking stages.
     """
@@ -219,6 +226,7 @@ class Config:
     n_candidates: int = 7
     refine: bool = True
     max_pixels: int = 200_000_000
+    max_memory_mb: float = MAX_MEMORY_MB
     search: SearchTuning = SearchTuning()
 
     def __post_init__(self) -> None:
@@ -235,6 +243,7 @@ class Config:
         if self.n_keypoints_2d is not None:
             check("n_keypoints_2d", lo=1, integer=True)
         check("target_size", lo=32, hi=100_000, integer=True)
+        check("max_memory_mb", lo=0.0, lo_open=True)
         check("n_pattern_points", lo=8, hi=100_000, integer=True)
         check("n_candidates", lo=1, hi=1000, integer=True)
         check("local_window", lo=3, hi=MAX_WINDOW, integer=True)

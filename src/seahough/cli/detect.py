@@ -124,7 +124,7 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     for name in (bar if bar is not None else images):
         t0 = time.perf_counter()
         try:
-            img = read_image(name, max_pixels=cfg.max_pixels)
+            img = read_image(name, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
             res = detector.search(img)
         except SeahoughError as e:
             say.error(f"{printable(name)}: {printable(_problem(e, name))}")

@@ -134,7 +134,7 @@ class Detector:
         cfg = self.config
         t0 = time.perf_counter()
         timings = {}
-        gray = to_gray(image, max_pixels=cfg.max_pixels)
+        gray = to_gray(image, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
         p = self.pattern
         s0, s1 = self.scale_range
         # a pattern that cannot fit the image at any searched scale is not there;

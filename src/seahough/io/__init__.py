@@ -1,5 +1,6 @@
-"""Reading images and frame sequences: files and arrays in, checked grey images out."""
+"""Reading images and frame sequences: files and arrays in, checked grey images out;
+images written with errors that name the file."""
 
-from .images import read_image, to_gray
+from .images import memory_needed, read_image, to_gray, write_bytes, write_image
 
-__all__ = ["read_image", "to_gray"]
+__all__ = ["read_image", "to_gray", "memory_needed", "write_image", "write_bytes"]

@@ -23,6 +23,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from ..config import MAX_MEMORY_MB
 from ..errors import ImageError, ImageReadError, ParameterError
 from .images import read_image
 
@@ -293,9 +294,10 @@ class FrameReader:
     asked for an earlier frame; a frame the decoder cannot give is an
     ImageError, and the frames after it are read on)."""
 
-    def __init__(self, items: list, max_pixels: int):
+    def __init__(self, items: list, max_pixels: int, max_memory_mb: float = MAX_MEMORY_MB):
         self.items = items
         self.max_pixels = max_pixels
+        self.max_memory_mb = max_memory_mb
         self._cap = None
         self._cap_path = None
         self._cap_next = 0
@@ -358,7 +360,7 @@ class FrameReader:
         ref = _split_video_ref(str(it))
         if ref is None:
             _entry(os.fspath(it))
-            return read_image(it, max_pixels=self.max_pixels)
+            return read_image(it, max_pixels=self.max_pixels, max_memory_mb=self.max_memory_mb)
         path, k = ref
         if self._cap is None or self._cap_path != path or k < self._cap_next:
             self.close()

@@ -1,141 +1,389 @@
-"""Image input: a path or an array in, a finite float32 grey image out."""
+"""Image input and output: a path or an array in, a finite float32 grey image
+out; arrays and figures written to files, with errors that name the file.
+
+Decoders
+--------
+No decoder may write to the process's stderr, and nothing here touches the
+process's file descriptors (other threads' output is never caught):
+
+- JPEG: libjpeg-turbo through ``simplejpeg``, whose warnings ("Corrupt JPEG
+  data: ...", "Premature end of JPEG file") come back as exceptions;
+- PNG: Pillow reads the header; OpenCV decodes the chunks that make the pixels
+  (no metadata for libpng to warn about, its log silenced); a damaged one is
+  described by Pillow's chunk check;
+- anything else: OpenCV, with OpenCV's own log silenced while it decodes.
+
+Pillow reads every header first: the size, the number of frames or pages, the
+EXIF orientation and what decoding would cost in memory are known, and
+checked, before a pixel is decoded.
+"""
 
 from __future__ import annotations
 
+import contextlib
+import io
 import os
-import re
-import sys
-import tempfile
 import threading
+from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
 import numpy as np
+import simplejpeg
+from PIL import Image
 
-from ..errors import ImageReadError, ImageSizeError, ImageValueError, WriteError
+from .._validate import number
+from ..config import MAX_MEMORY_MB
+from ..errors import ImageReadError, ImageSizeError, ImageValueError, ParameterError, WriteError
 
 #: The smallest side, in pixels, an image must have to hold any edge.
 MIN_SIDE = 8
+#: Default memory budget (MB) of reading and searching one image file.
+#: Bytes per image pixel that a search's working arrays take beyond the grey
+#: image, with the default downscaling (measured: docs/errors.md, "Images").
+_SEARCH_BYTES = 4
+#: EXIF orientations (the tag's values) and how to show the stored pixels.
+_SHOW = {
+    2: lambda a: a[:, ::-1],
+    3: lambda a: a[::-1, ::-1],
+    4: lambda a: a[::-1],
+    5: lambda a: a.swapaxes(0, 1),
+    6: lambda a: np.rot90(a, -1),
+    7: lambda a: a[::-1, ::-1].swapaxes(0, 1),
+    8: lambda a: np.rot90(a, 1),
+}
+#: ... and back (6 and 8 undo each other; the others undo themselves).
+_UNSHOW = {**_SHOW, 6: _SHOW[8], 8: _SHOW[6]}
+#: Pillow modes as OpenCV decodes them: (channels, bytes per sample).
+_LAYOUT = {"1": (1, 1), "L": (1, 1), "P": (3, 1), "PA": (4, 1), "LA": (4, 1), "La": (4, 1),
+           "RGB": (3, 1), "RGBA": (4, 1), "RGBa": (4, 1), "RGBX": (4, 1), "CMYK": (3, 1),
+           "YCbCr": (3, 1), "LAB": (3, 1), "HSV": (3, 1), "I": (1, 4), "F": (1, 4)}
+#: formats whose frames are an animation or pages (a phone's MPO is one photo)
+_MULTI = {"GIF": "animated", "PNG": "animated", "WEBP": "animated", "AVIF": "animated",
+          "TIFF": "multi-page"}
+_JPEG = b"\xff\xd8\xff"
+_PNG = b"\x89PNG\r\n\x1a\n"
 
 
-def _check_header(path: Path, max_pixels: int) -> None:
-    """Refuse a file whose header claims more than ``max_pixels`` pixels."""
+@dataclass
+class _Header:
+    """What Pillow (or, for JPEG, libjpeg-turbo) reads from a file's header."""
+
+    width: int
+    height: int
+    channels: int = 3
+    sample_bytes: int = 1
+    floating: bool = False
+    frames: int = 1
+    format: str = ""
+    orientation: int = 1
+    image: Image.Image | None = None
+
+
+def _probe(data: bytes) -> _Header | None:
+    """The header of ``data``, or None when neither Pillow nor (for a JPEG)
+    libjpeg-turbo recognises it. A PNG's orientation is read after decoding
+    (Pillow would decode it to find an eXIf chunk after the image data)."""
+    Image.MAX_IMAGE_PIXELS = None  # our own limits apply, below
     try:
-        from PIL import Image
-    except ImportError:  # pragma: no cover - pillow is a dependency
-        return
-    Image.MAX_IMAGE_PIXELS = None  # we apply our own limit below
-    try:
-        with Image.open(path) as im:
-            w, h = im.size
+        im = Image.open(io.BytesIO(data))
+        w, h = im.size
     except Exception:
-        return  # not a format Pillow knows; OpenCV decides below
+        if data[:3] != _JPEG:
+            return None
+        try:
+            h, w, space, _ = simplejpeg.decode_jpeg_header(data)
+        except ValueError:
+            return None
+        return _Header(w, h, channels=1 if space == "Gray" else 3, format="JPEG")
+    mode = im.mode
+    try:
+        args = im.tile[0][3]
+        raw = args[0] if isinstance(args, tuple) else args
+    except (IndexError, TypeError):
+        raw = ""
+    raw = raw if isinstance(raw, str) else ""
+    if mode.startswith("I;16"):
+        c, b = 1, 2
+    else:
+        c, b = _LAYOUT.get(mode, (4, 4))
+        if "16" in raw:
+            b = 2
+        if mode == "P" and "transparency" in im.info:
+            c = 4
+    head = _Header(w, h, c, b, floating=mode == "F" or raw.endswith("F"),
+                   format=im.format or "", image=im)
+    try:
+        head.frames = int(getattr(im, "n_frames", 1))
+        if head.format != "PNG":
+            head.orientation = int(im.getexif().get(0x0112, 1))
+    except Exception:  # damaged metadata: decode the pixels as stored
+        pass
+    return head
+
+
+def memory_needed(width: int, height: int, *, channels: int = 1, sample_bytes: int = 1,
+                  floating: bool = False, file_bytes: int = 0) -> int:
+    """Bytes that reading a ``width`` x ``height`` image file and searching
+    it take at their peak, beyond the program itself.
+
+    The model, per pixel: the decoded array (``channels`` x ``sample_bytes``),
+    plus the largest of a second copy of it (a decoder's buffer, or turning
+    it as the EXIF orientation says), :func:`to_gray`'s conversion (a float32
+    copy of deep or float colours, or an 8-bit grey one, a NaN mask, and the
+    float32 grey image), and the grey image with a search's working arrays
+    (measured; they are small at the default downscaling); and twice the
+    file's size (its bytes, and a copy some decoders make). It bounds the
+    measured peaks in docs/errors.md.
+
+    Examples
+    --------
+    >>> memory_needed(1000, 1000)                          # 8-bit grey: 9 bytes a pixel
+    9000000
+    >>> memory_needed(1000, 1000, channels=3, sample_bytes=2) // 1000000
+    22
+    """
+    decoded = channels * sample_bytes
+    convert = (4 * channels if sample_bytes > 1 or floating else 1) if channels > 1 else 0
+    convert += channels if floating else 0
+    per_px = decoded + max(decoded, convert + 4, 4 + _SEARCH_BYTES)
+    return int(width) * int(height) * per_px + 2 * int(file_bytes)
+
+
+def _check_header(p: Path, head: _Header, size: int, max_pixels: int,
+                  max_memory_mb: float) -> None:
+    """Refuse, before decoding: too many pixels, several frames, too much memory."""
+    w, h = head.width, head.height
     if w * h > max_pixels:
         raise ImageSizeError(
-            f"{path}: header claims {w}x{h} = {w * h} pixels, over the limit of "
+            f"{p}: header claims {w}x{h} = {w * h} pixels, over the limit of "
             f"{max_pixels} (Config.max_pixels); refusing to decode")
+    kind = _MULTI.get(head.format)
+    if kind and head.frames > 1:
+        what = "frames" if kind == "animated" else "pages"
+        raise ImageReadError(f"{p}: {kind} image with {head.frames} {what}: extract the "
+                             f"{what[:-1]} to search (only single images are read)")
+    need = memory_needed(w, h, channels=head.channels, sample_bytes=head.sample_bytes,
+                         floating=head.floating, file_bytes=size)
+    if need > max_memory_mb * 2 ** 20:
+        depth = f"{8 * head.sample_bytes}-bit {'float' if head.floating else 'integer'}"
+        raise ImageSizeError(
+            f"{p}: {w}x{h} pixels of {head.channels} channel(s), {depth}, need about "
+            f"{-(-need // 2 ** 20)} MB to read and search, over the memory limit of "
+            f"{max_memory_mb:g} MB; refusing to decode (raise Config.max_memory_mb, or read_image's max_memory_mb, to allow it)")
 
 
-def _check_complete(path: Path, data: bytes) -> None:
-    """Refuse truncated JPEG and PNG files (decoders would fill in grey)."""
-    tail = data.rstrip(b"\x00")[-16:]
-    if data[:3] == b"\xff\xd8\xff" and not tail.endswith(b"\xff\xd9"):
-        raise ImageReadError(f"{path}: truncated JPEG (no end-of-image marker)")
-    if data[:8] == b"\x89PNG\r\n\x1a\n" and b"IEND" not in tail:
-        raise ImageReadError(f"{path}: truncated PNG (no IEND chunk)")
+_quiet_lock = threading.Lock()
+_quiet_users = 0
+_quiet_saved = None
 
 
-class _DecoderMessages:
-    """Catch what the C decoders (libjpeg, libpng) print on stderr.
+@contextlib.contextmanager
+def _quiet_opencv():
+    """OpenCV's own log silenced while any thread decodes or encodes through
+    it ("can't read header" lines would reach stderr beside our message); its
+    level is restored when the last one finishes. Process-wide, as OpenCV's
+    log level is, but never at the level of file descriptors."""
+    global _quiet_users, _quiet_saved
+    with _quiet_lock:
+        if _quiet_users == 0:
+            _quiet_saved = cv2.utils.logging.getLogLevel()
+            cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+        _quiet_users += 1
+    try:
+        yield
+    finally:
+        with _quiet_lock:
+            _quiet_users -= 1
+            if _quiet_users == 0:
+                cv2.utils.logging.setLogLevel(_quiet_saved)
 
-    They report damaged data there, not to OpenCV: a JPEG with corrupt
-    entropy-coded data decodes "successfully" into garbage and a warning.
-    File descriptor 2 is pointed at a temporary file while decoding (one
-    decode at a time), and the text is kept in ``text`` instead of reaching
-    the user's terminal as stray lines.
-    """
 
-    _lock = threading.Lock()
-
-    def __enter__(self):
-        self.text = ""
-        self._saved = None
-        self._lock.acquire()
+def _opencv_decode(data: bytes):
+    with _quiet_opencv():
         try:
-            sys.stderr.flush()
-            self._tmp = tempfile.TemporaryFile()
-            self._saved = os.dup(2)
-            os.dup2(self._tmp.fileno(), 2)
-        except (OSError, ValueError, AttributeError):  # no usable fd 2: decode as is
-            self._saved = None
-        return self
-
-    def __exit__(self, *exc):
-        try:
-            if self._saved is not None:
-                os.dup2(self._saved, 2)
-                os.close(self._saved)
-                self._tmp.seek(0)
-                self.text = self._tmp.read(4096).decode("utf-8", "replace")
-                self._tmp.close()
-        finally:
-            self._lock.release()
-        return False
+            return cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+        except cv2.error:
+            return None
 
 
-#: OpenCV's log prefix, e.g. ``[ WARN:0@0.518] global grfmt_png.cpp:793 read_from_io``
-_CV_LOG = re.compile(r"^\[\s*(?P<level>[A-Z]+)[^\]]*\]\s*(?:global\s+)?"
-                     r"(?:[\w./\\-]+\.(?:cpp|hpp|cc|c|h):\d+\s+[\w:~<>]+\s*)?")
-#: OpenCV's exception text inside a log line (source path, line, error code)
-_CV_ERROR = re.compile(r"[\s:]*OpenCV\([\d.]+\)\s.*$")
-#: a function name leading a log message, e.g. ``imdecode_('.png'): ``
-_CV_FUNC = re.compile(r"^[A-Za-z_]\w*\([^)]*\)\s*:\s*")
-_LIB_PREFIX = re.compile(r"^(?:lib(?P<lib>png|jpeg|tiff|webp)\s+(?:warning|error)\s*:\s*|"
-                         r"OpenCV\([\d.]+\)\s*)", re.IGNORECASE)
-
-
-def _first_line(text: str) -> str:
-    """The first message the decoders printed, as a clean phrase: without
-    OpenCV's log prefix (level, time, source file and line) or the library's
-    ``libpng warning:``, e.g. ``PNG: image width is zero in IHDR``; debug
-    and info log lines are skipped.
-
-    >>> _first_line("[ WARN:0@0.518] global grfmt_png.cpp:793 read_from_io "
-    ...             "libpng warning: Image width is zero in IHDR\\n")
-    'PNG: image width is zero in IHDR'
-    """
-    for line in text.splitlines():
-        line = line.strip()
-        m = _CV_LOG.match(line)
-        if m:
-            if m.group("level") in ("INFO", "DEBUG", "VERBOSE", "TRACE"):
-                continue
-            line = _CV_FUNC.sub("", _CV_ERROR.sub("", line[m.end():]))
-        lib = None
-        m = _LIB_PREFIX.match(line)
-        while m:
-            lib = lib or m.group("lib")
-            line = line[m.end():].strip()
-            m = _LIB_PREFIX.match(line)
-        line = " ".join(line.split()).rstrip(".:")
-        if not line:
-            continue
-        if lib:
-            line = f"{lib.upper()}: {line[:1].lower()}{line[1:]}"
-        return line[:160]
+def _pillow_problem(head: _Header | None) -> str:
+    """Why Pillow cannot decode the image (for a message), or '': asked only
+    of its decoders that print nothing (its libtiff prints on stderr)."""
+    if head is None or head.image is None or head.format not in ("BMP", "GIF", "PPM", "WEBP"):
+        return ""
+    try:
+        head.image.load()
+    except Exception as e:
+        return " ".join(str(e).split())[:160]
     return ""
 
 
-def read_image(path: str | os.PathLike, *, max_pixels: int = 200_000_000) -> np.ndarray:
-    """Read an image file as OpenCV does (any depth, grey/BGR/BGRA).
+def _tj(e: Exception) -> str:
+    """libjpeg-turbo's message, without the TurboJPEG function it came through."""
+    text = " ".join(str(e).split())
+    return text.split("(): ", 1)[1] if text.startswith("tj") and "(): " in text else text
+
+
+def _decode_jpeg(p: Path, data: bytes) -> np.ndarray:
+    """A JPEG as OpenCV decodes it (grey, or BGR), refusing what libjpeg-turbo
+    reports as damaged: its warnings are exceptions here, not stderr lines."""
+    try:
+        space = simplejpeg.decode_jpeg_header(data)[2]
+    except ValueError as e:
+        return _jpeg_by_opencv(p, data, _tj(e))
+    target = {"Gray": "GRAY", "CMYK": "CMYK", "YCCK": "CMYK"}.get(space, "BGR")
+    try:
+        img = simplejpeg.decode_jpeg(data, target, strict=True)
+    except ValueError as e:
+        img = _jpeg_warned(p, data, target, _tj(e))
+    if target == "CMYK":  # sound; OpenCV turns CMYK into BGR its own way: keep its colours
+        return _jpeg_by_opencv(p, data, "CMYK")
+    return img.reshape(img.shape[:2]) if img.shape[2] == 1 else img
+
+
+#: libjpeg warnings about a header oddity that leaves the pixels sound
+_JPEG_HARMLESS = ("Invalid SOS parameters", "Warning: unknown JFIF", "Unknown Adobe color")
+
+
+def _jpeg_warned(p: Path, data: bytes, target: str, first: str) -> np.ndarray:
+    """The JPEG whose strict decoding stopped at ``first``: decoded past a
+    harmless warning, else refused (truncated, or damaged data)."""
+    if first.startswith("Premature end of JPEG file"):
+        raise ImageReadError(f"{p}: truncated JPEG (the image data ends early)")
+    if first.startswith(_JPEG_HARMLESS):
+        try:
+            return simplejpeg.decode_jpeg(data, target, strict=False)
+        except ValueError:
+            pass
+    raise ImageReadError(f"{p}: corrupt JPEG data ({first})")
+
+
+def _jpeg_by_opencv(p: Path, data: bytes, why: str) -> np.ndarray:
+    """A JPEG decoded by OpenCV's libjpeg (silent on fatal errors): a CMYK
+    one (already found sound), or one using what TurboJPEG lacks (12-bit,
+    lossless, unusual sampling); any other fatal error is refused as is."""
+    lacks = ("Unsupported JPEG", "subsampling", "not supported", "omitted at compile time")
+    if why != "CMYK" and not any(w in why for w in lacks):
+        raise ImageReadError(f"{p}: not a JPEG that can be decoded ({why})")
+    img = _opencv_decode(data)
+    if img is None:
+        raise ImageReadError(f"{p}: not a JPEG that can be decoded ({why})")
+    return img
+
+
+def _png_image_chunks(data: bytes) -> tuple[bytes, bytes | None]:
+    """The PNG with only the chunks that make its pixels (no metadata for
+    libpng to warn about), and the content of its eXIf chunk (or None)."""
+    out, i, exif = [data[:8]], 8, None
+    while i + 8 <= len(data):
+        kind = data[i + 4:i + 8]
+        end = i + 12 + int.from_bytes(data[i:i + 4], "big")
+        if kind in (b"IHDR", b"PLTE", b"tRNS", b"IDAT", b"IEND"):
+            out.append(data[i:end])
+        elif kind == b"eXIf":
+            exif = data[i + 8:end - 4]
+        if kind == b"IEND":
+            break
+        i = end
+    return b"".join(out), exif
+
+
+def _png_not_read(p: Path, data: bytes, head: _Header | None, err: Exception | None) -> str:
+    """The message for a PNG that Pillow cannot read: truncated, damaged, or no PNG."""
+    if head is None:  # Pillow did not take it as a PNG at all: say why, from the header
+        if len(data) < 33 or data[12:16] != b"IHDR":
+            return f"{p}: truncated PNG (the file ends in its header)" if len(data) < 33 \
+                else f"{p}: not a valid PNG (no IHDR chunk first)"
+        w, h = int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
+        if w == 0 or h == 0:
+            return f"{p}: not a valid PNG (its header claims {w}x{h} pixels)"
+        return f"{p}: not a valid PNG (a header Pillow cannot read)"
+    why = " ".join(str(err).split()) if err is not None else "its image data cannot be decoded"
+    try:  # Pillow's chunk check names the damaged chunk
+        Image.open(io.BytesIO(data)).verify()
+    except Exception as v:
+        why = " ".join(str(v).split()) or why
+    if "truncated" in why.lower():
+        return f"{p}: truncated PNG (the image data ends early)"
+    return f"{p}: corrupt PNG data ({why[:160]})"
+
+
+def _decode_png(p: Path, data: bytes, head: _Header | None) -> tuple[np.ndarray, int]:
+    """A PNG as OpenCV decodes it (grey, BGR or BGRA, 8 or 16 bits) and its
+    EXIF orientation. Pillow has read its header and checks every chunk
+    (CRCs, the end of the file); OpenCV (libpng, faster than Pillow's own
+    decoder) then decodes only the chunks that make the pixels, with its log
+    silenced, so libpng has nothing to say on stderr. (A deflate stream
+    damaged under an intact CRC, which takes deliberate work, would still get
+    one libpng line through.)"""
+    if head is None or head.format != "PNG":
+        raise ImageReadError(_png_not_read(p, data, None, None))
+    if head.image is not None:
+        head.image.close()
+        head.image = None
+    try:  # every chunk's CRC and the end of the file, before libpng sees them: it
+        # prints its errors (truncation, damaged chunks) on stderr itself
+        Image.open(io.BytesIO(data)).verify()
+    except Exception as e:
+        raise ImageReadError(_png_not_read(p, data, head, e)) from None
+    chunks, exif = _png_image_chunks(data)
+    img = _opencv_decode(chunks)
+    if img is None:
+        raise ImageReadError(_png_not_read(p, data, head, None))
+    orientation = 1
+    if exif is not None:
+        try:
+            tags = Image.Exif()
+            tags.load(exif)
+            orientation = int(tags.get(0x0112, 1))
+        except Exception:  # damaged metadata: the pixels as stored
+            pass
+    return img, orientation
+
+
+def read_image(path: str | os.PathLike, *, max_pixels: int = 200_000_000,
+               max_memory_mb: float = MAX_MEMORY_MB, orientation: str = "exif") -> np.ndarray:
+    """Read an image file as OpenCV's ``IMREAD_UNCHANGED`` gives it (any
+    depth; grey, BGR or BGRA), turned as the photo is shown.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The file: JPEG, PNG, TIFF, WebP, BMP, a single-frame GIF, or any
+        other format OpenCV reads. Bytes after the image (a phone's motion
+        video after a JPEG, a camera's trailer) are ignored.
+    max_pixels : int
+        Files whose header claims more pixels are refused before decoding.
+    max_memory_mb : float
+        Files that would need more memory (MB) to read and search, by
+        :func:`memory_needed`, are refused before decoding.
+    orientation : {"exif", "stored"}
+        ``"exif"``: turned and flipped as the EXIF Orientation tag says, as
+        phones, cameras and viewers show the photo (positions found in it are
+        in those pixels). ``"stored"``: the pixels as stored in the file.
 
     Raises
     ------
     ImageReadError
-        Missing, unreadable, truncated or not an image.
+        Missing, unreadable, truncated, damaged, not an image, or an
+        animation or several pages.
     ImageSizeError
-        Empty, or larger than ``max_pixels``.
+        Empty, or larger than ``max_pixels`` or ``max_memory_mb`` allow.
+    ParameterError
+        ``orientation`` or ``max_memory_mb`` out of range.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     write_image(os.path.join(d, "a.jpg"), np.zeros((30, 40, 3), np.uint8))
+    ...     read_image(os.path.join(d, "a.jpg")).shape
+    (30, 40, 3)
     """
+    if orientation not in ("exif", "stored"):
+        raise ParameterError(f"orientation={orientation!r}: must be 'exif' or 'stored'")
+    number("max_memory_mb", max_memory_mb, lo=0.0, lo_open=True)
     p = Path(path)
     if not p.exists():
         raise ImageReadError(f"{p}: no such file")
@@ -147,27 +395,60 @@ def read_image(path: str | os.PathLike, *, max_pixels: int = 200_000_000) -> np.
         raise ImageReadError(f"{p}: cannot read ({e.strerror or e})") from None
     if not data:
         raise ImageReadError(f"{p}: empty file")
-    _check_header(p, max_pixels)
-    _check_complete(p, data)
-    with _DecoderMessages() as messages:
-        img = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
-    if img is None:
-        why = _first_line(messages.text)
-        raise ImageReadError(f"{p}: not an image OpenCV can decode" + (f" ({why})" if why else ""))
-    if "Corrupt JPEG data" in messages.text or "Premature end of JPEG" in messages.text:
-        raise ImageReadError(f"{p}: corrupt JPEG data ({_first_line(messages.text)})")
+    head = _probe(data)
+    if head is not None:
+        _check_header(p, head, len(data), max_pixels, max_memory_mb)
+    turned = 1  # the orientation the decoder has already applied
+    if data[:3] == _JPEG:
+        img = _decode_jpeg(p, data)
+    elif data[:8] == _PNG:
+        img, shown = _decode_png(p, data, head)
+        head.orientation = shown
+    else:
+        img = _opencv_decode(data)
+        if img is None:
+            why = _pillow_problem(head)
+            raise ImageReadError(f"{p}: not an image OpenCV can decode"
+                                 + (f" ({why})" if why else ""))
+        if head is not None and head.format == "TIFF" and _opencv_turns_tiff():
+            turned = head.orientation
     if img.size == 0:
         raise ImageSizeError(f"{p}: image has no pixels")
+    want = head.orientation if head is not None and orientation == "exif" else 1
+    if want != turned:
+        if turned in _UNSHOW:
+            img = _UNSHOW[turned](img)
+        if want in _SHOW:
+            img = _SHOW[want](img)
+        img = np.ascontiguousarray(img)
     return img
 
 
+_tiff_turned: list = []
+
+
+def _opencv_turns_tiff() -> bool:
+    """Whether OpenCV's TIFF decoder applies the Orientation tag itself
+    (OpenCV 5's does, even for IMREAD_UNCHANGED): asked once, of a 2x1 TIFF
+    turned upside down."""
+    if not _tiff_turned:
+        buf = io.BytesIO()
+        Image.fromarray(np.array([[0, 255]], np.uint8)).save(buf, "TIFF", tiffinfo={274: 3})
+        img = _opencv_decode(buf.getvalue())
+        _tiff_turned.append(img is not None and int(img[0, 0]) == 255)
+    return _tiff_turned[0]
+
+
 def to_gray(image, *, name: str = "image", max_pixels: int = 200_000_000,
-            min_side: int = MIN_SIDE) -> np.ndarray:
+            min_side: int = MIN_SIDE, max_memory_mb: float = MAX_MEMORY_MB,
+            orientation: str = "exif") -> np.ndarray:
     """A path or array as a float32 grey image with grey levels in [0, 255].
 
     Accepts grey (HxW or HxWx1), BGR or BGRA arrays of dtype uint8, uint16,
     other integers, bool or float. uint16 is divided by 257; floats whose
-    maximum is at most 1 are taken as [0, 1] and multiplied by 255.
+    maximum is at most 1 are taken as [0, 1] and multiplied by 255. A path
+    is read by :func:`read_image` (with ``max_pixels``, ``max_memory_mb``
+    and ``orientation``).
 
     Examples
     --------
@@ -177,7 +458,8 @@ def to_gray(image, *, name: str = "image", max_pixels: int = 200_000_000,
     label = name
     if isinstance(image, (str, os.PathLike)):
         label = str(image)
-        image = read_image(image, max_pixels=max_pixels)
+        image = read_image(image, max_pixels=max_pixels, max_memory_mb=max_memory_mb,
+                           orientation=orientation)
     if not isinstance(image, np.ndarray):
         raise ImageValueError(f"{label}: expected a numpy array or a file path, "
                               f"got {type(image).__name__}")
@@ -203,11 +485,12 @@ def to_gray(image, *, name: str = "image", max_pixels: int = 200_000_000,
             raise ImageValueError(f"{label}: contains NaN or infinite values")
         if a.dtype.itemsize > 4 and np.abs(a).max(initial=0) > np.finfo(np.float32).max:
             raise ImageValueError(f"{label}: values beyond +-3.4e38 (float32 range)")
-        a = a.astype(np.float32)
+        a = a.astype(np.float32)  # a copy: scaled in place (no second copy)
         if a.max(initial=0) <= 1.0 and a.min(initial=0) >= 0.0:
-            a = a * 255.0
+            a *= 255.0
     elif a.dtype == np.uint16:
-        a = a.astype(np.float32) / 257.0
+        a = a.astype(np.float32)
+        a /= 257.0
     elif a.dtype != np.uint8:
         a = a.astype(np.float32)
     if a.ndim == 3:
@@ -250,10 +533,40 @@ def to_bgr8(image) -> np.ndarray:
     return a
 
 
-def write_image(path, image) -> None:
-    """Write an image array to ``path`` (the format from its extension, as
-    ``cv2.imwrite``); raises :class:`~seahough.errors.WriteError` naming the
-    file when it cannot be written.
+def write_bytes(path, data, *, what: str = "the file") -> None:
+    """Write ``data`` to ``path`` (created or replaced); a
+    :class:`~seahough.errors.WriteError` naming the file and the system's
+    reason when it cannot be written (no folder, no permission, a full disk).
+    A file cut short by a failing write is removed, not left half-written.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     write_bytes(os.path.join(d, "a.txt"), b"abc")
+    ...     try:
+    ...         write_bytes(os.path.join(d, "no", "b.txt"), b"abc", what="the note")
+    ...     except WriteError as e:
+    ...         print(str(e).replace(d, "DIR"))
+    DIR/no/b.txt: cannot write the note (No such file or directory)
+    """
+    opened = False
+    try:
+        with open(path, "wb") as f:
+            opened = True
+            f.write(data)
+    except OSError as e:
+        if opened and os.path.isfile(path):  # a regular file we began: not left cut short
+            with contextlib.suppress(OSError):
+                os.remove(path)
+        raise WriteError(f"{path}: cannot write {what} ({e.strerror or e})") from None
+
+
+def write_image(path, image, *, what: str = "the image") -> None:
+    """Write an image array to ``path``, encoded by OpenCV in the format of
+    its extension (PNG without one), with :func:`write_bytes`: a
+    :class:`~seahough.errors.WriteError` naming the file when it cannot be
+    encoded or written, and nothing printed by the encoders.
 
     Examples
     --------
@@ -263,9 +576,14 @@ def write_image(path, image) -> None:
     ...     read_image(os.path.join(d, "a.png")).shape
     (4, 5)
     """
+    ext = os.path.splitext(os.fspath(path))[1].lower() or ".png"
     try:
-        ok = cv2.imwrite(os.fspath(path), image)
+        with _quiet_opencv():
+            ok, buf = cv2.imencode(ext, image)
     except cv2.error:
         ok = False
     if not ok:
-        raise WriteError(f"{path}: cannot write the image")
+        a = np.asarray(image)
+        raise WriteError(f"{path}: cannot write {what} (OpenCV cannot encode an array of "
+                         f"shape {a.shape} and dtype {a.dtype} as {ext})")
+    write_bytes(path, buf, what=what)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import os
 from pathlib import Path
 
 import cv2
@@ -12,7 +11,7 @@ import numpy as np
 from ..errors import ImageError
 from ..geometry import apply_matrix, compose, frame_centre, invert_matrix
 from ..io.frames import FrameReader
-from ..io.images import to_bgr8
+from ..io.images import to_bgr8, write_image
 from .track import iter_odometry_csv
 
 def _posed(csv_path):
@@ -83,6 +82,5 @@ def build_mosaic(csv_path, reader: FrameReader, shape, path: Path, max_side: int
         canvas[by0:by1, bx0:bx1][take] = warped[take]
         sub_best[take] = d[take]
     path.parent.mkdir(parents=True, exist_ok=True)
-    if not cv2.imwrite(os.fspath(path), canvas):
-        raise OSError(f"{path}: cannot write the mosaic")
+    write_image(path, canvas, what="the mosaic")
     return path

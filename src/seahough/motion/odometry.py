@@ -330,7 +330,7 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     angle_range = pair("angle_range", angle_range)  # kept as given: a window around 0
     mpp = resolve_metres_per_pixel(metres_per_pixel, altitude, focal_px)
     items = list_frames(frames)
-    reader = FrameReader(items, cfg.max_pixels)
+    reader = FrameReader(items, cfg.max_pixels, cfg.max_memory_mb)
     settings = run_settings(scale_range, angle_range, mpp, cfg, tuning)
     digest = settings_hash(settings)
     columns = CSV_BASE + (CSV_METRIC if mpp else []) + CSV_MORE + CSV_CHECK
@@ -361,7 +361,8 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
         if i is None:
             return None
         if i not in frames_mem:
-            gray_i = to_gray(reader.raw(i), max_pixels=cfg.max_pixels)
+            gray_i = to_gray(reader.raw(i), max_pixels=cfg.max_pixels,
+                         max_memory_mb=cfg.max_memory_mb)
             frames_mem[i] = Frame(i, searcher.crop(gray_i))
         return frames_mem[i]
 
@@ -386,7 +387,8 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
                     r["_cum"] = (None if r["matrix"] is None
                                  else np.asarray(r["matrix"], float).reshape(2, 3))
                     if r["status"] != "unreadable" and st.shape is None:
-                        g0 = to_gray(reader.raw(r["index"]), max_pixels=cfg.max_pixels)
+                        g0 = to_gray(reader.raw(r["index"]), max_pixels=cfg.max_pixels,
+                         max_memory_mb=cfg.max_memory_mb)
                         st.shape, st.box = g0.shape, content_box(g0)
                     if mpp:
                         r["x_m"], r["y_m"] = metric_position(r, st.shape, mpp)
@@ -442,7 +444,8 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
             try:
                 raw = reader.raw(i)
                 row["frame_hash"] = reader.fingerprint(i, raw)
-                gray = to_gray(raw, max_pixels=cfg.max_pixels)
+                gray = to_gray(raw, max_pixels=cfg.max_pixels,
+                         max_memory_mb=cfg.max_memory_mb)
                 check_motion_size(gray.shape, "frame")
                 if st.shape is not None and gray.shape != st.shape:
                     raise ImageError(f"size {gray.shape[1]}x{gray.shape[0]} differs from the "

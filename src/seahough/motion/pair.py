@@ -116,8 +116,10 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
     if not isinstance(cfg, Config):
         raise ParameterError("config must be a seahough.Config")
     _check_thresholds(max_shift, min_confidence, min_score)
-    prev = to_gray(previous, name="previous frame", max_pixels=cfg.max_pixels)
-    cur = to_gray(current, name="current frame", max_pixels=cfg.max_pixels)
+    prev = to_gray(previous, name="previous frame", max_pixels=cfg.max_pixels,
+                   max_memory_mb=cfg.max_memory_mb)
+    cur = to_gray(current, name="current frame", max_pixels=cfg.max_pixels,
+                   max_memory_mb=cfg.max_memory_mb)
     if prev.shape != cur.shape:
         raise ParameterError(f"frames differ in size: previous {prev.shape[1]}x{prev.shape[0]}, "
                              f"current {cur.shape[1]}x{cur.shape[0]}")
@@ -196,7 +198,8 @@ def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
     the current frame's (:func:`frame_features`)."""
     cfg = config or MOTION_CONFIG
     _check_thresholds(max_shift, min_confidence, min_score)
-    cur = to_gray(current, name="current frame", max_pixels=cfg.max_pixels)
+    cur = to_gray(current, name="current frame", max_pixels=cfg.max_pixels,
+                   max_memory_mb=cfg.max_memory_mb)
     h, w = cur.shape
     ph, pw = pattern.image.shape
     if (ph, pw) != (h, w):

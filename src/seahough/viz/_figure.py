@@ -3,6 +3,7 @@ a figure, measuring text and showing an image."""
 
 from __future__ import annotations
 
+import io
 import os
 from pathlib import Path
 
@@ -12,7 +13,8 @@ from matplotlib import patheffects
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from ..io.images import read_image, to_bgr8, to_gray
+from ..errors import WriteError
+from ..io.images import read_image, to_bgr8, to_gray, write_bytes
 
 #: Resolution of every figure (pixels per inch); sizes are given in pixels.
 DPI = 100
@@ -44,11 +46,18 @@ def _text_size(fig: Figure, text: str, **props) -> tuple[float, float]:
 
 def _finish(fig: Figure, path) -> Figure:
     """Save ``fig`` at ``path`` (its folder made as needed; the format from
-    the extension, PNG without one) unless ``path`` is None; return it."""
+    the extension, PNG without one) unless ``path`` is None; return it.
+    Rendered in memory, then written by :func:`~seahough.io.images.write_bytes`:
+    a :class:`~seahough.errors.WriteError` naming the file when it cannot be."""
     if path is not None:
         p = Path(path)
-        p.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(os.fspath(p), dpi=DPI, format=p.suffix[1:].lower() or "png")
+        try:
+            p.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise WriteError(f"{p}: cannot write the figure ({e.strerror or e})") from None
+        buf = io.BytesIO()
+        fig.savefig(buf, dpi=DPI, format=p.suffix[1:].lower() or "png")
+        write_bytes(p, buf.getbuffer(), what="the figure")
     return fig
 
 

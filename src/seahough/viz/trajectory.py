@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import math
-import os
 from pathlib import Path
 
-import cv2
 import numpy as np
 from matplotlib.figure import Figure
 
+from ..io.images import write_image
 from ._figure import TRUTH_COLOUR, _figure, _finish
 
 
@@ -162,6 +161,5 @@ def save_mosaic(image, path) -> Path:
     a = np.asarray(image)
     if a.dtype != np.uint8:
         a = np.clip(a, 0, 255).astype(np.uint8)
-    if not cv2.imwrite(os.fspath(p), a):
-        raise OSError(f"{p}: cannot write the image (unknown extension or unwritable folder)")
+    write_image(p, a, what="the mosaic")
     return p
