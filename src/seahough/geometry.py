@@ -188,6 +188,28 @@ def format_angle(degrees: float, decimals: int = 2, period: float = 360.0) -> st
     return f"{r + 0.0:.{decimals}f}"      # + 0.0: never "-0.00"
 
 
+def matrix_power(matrix, t: float) -> np.ndarray:
+    """A similarity's 2x3 matrix applied ``t`` times (any real ``t``: roots
+    too), taken exactly from its first column (:meth:`Similarity.from_columns`).
+
+    >>> matrix_power([[0, 1, 0], [-1, 0, 0]], 0.5).round(6) + 0.0   # half of a quarter turn
+    array([[ 0.707107,  0.707107,  0.      ],
+           [-0.707107,  0.707107,  0.      ]])
+    """
+    return Similarity.from_columns(matrix).power(t).matrix
+
+
+def nearest_similarity(matrix) -> np.ndarray:
+    """The 2x3 matrix of the similarity nearest to a 2x3 matrix (averages
+    out the rounding asymmetry that products of similarities pick up).
+
+    >>> nearest_similarity([[1.0, 0.2, 5.0], [-0.2, 1.0002, 0.0]]).round(4)
+    array([[ 1.0001,  0.2   ,  5.    ],
+           [-0.2   ,  1.0001,  0.    ]])
+    """
+    return Similarity.from_matrix(matrix).matrix
+
+
 def shift_origin(matrix, ox: float, oy: float) -> np.ndarray:
     """A 2x3 matrix seen in coordinates whose origin is at ``(ox, oy)``:
     ``T(-o) M T(o)`` (e.g. a motion measured on crops that start at ``o``

@@ -51,12 +51,13 @@ from .._validate import pair
 from ..config import ODOMETRY_CONFIG, Config, OdometryTuning
 from ..core.accumulator import check_ranges
 from ..errors import ImageError, ParameterError, SeahoughError, WriteError
-from ..geometry import (Similarity, angle_difference, apply_matrix, compose, frame_centre,
-                        invert_matrix, matrix_to_pose, overlap, shift_origin, wrap_angle)
+from ..geometry import (angle_difference, apply_matrix, compose, frame_centre, invert_matrix,
+                        matrix_power, matrix_to_pose, nearest_similarity, overlap,
+                        shift_origin, wrap_angle)
 from ..io.frames import FrameReader, list_frames
 from ..io.images import to_gray
 from .mosaic import build_mosaic
-from .state import Frame, State, advance, power, ref_cum
+from .state import Frame, State, advance, ref_cum
 from .pair import check_motion_size, content_box, frame_factor, frame_features, search_pair
 from .runfiles import (RunFolder, check_kept_row, open_track, run_settings, settings_hash,
                        write_output, write_row)
@@ -70,11 +71,6 @@ __all__ = ["run_odometry", "ODOMETRY_CONFIG", "OdometryTuning"]
 TUNING = OdometryTuning()
 
 _IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
-
-
-def _similar(m) -> np.ndarray:
-    """The nearest similarity to a 2x3 matrix (kills rounding asymmetry)."""
-    return Similarity.from_matrix(m).matrix
 
 
 @dataclass
@@ -187,7 +183,7 @@ class _Searcher:
             d = None
         if d is None:
             return None, "no_motion"
-        m = _similar(d.matrix)
+        m = nearest_similarity(d.matrix)
         ov = overlap(m, w, h)
         t = self.tuning
         if d.confidence < t.min_confidence:
@@ -522,7 +518,7 @@ def _measure_frame(row, i, gray, st: State, searcher: _Searcher, load):
     res = None
     n = i - st.meas
     if st.vel is not None:
-        pred_cum = compose(power(st.vel, n), st.meas_cum)
+        pred_cum = compose(matrix_power(st.vel, n), st.meas_cum)
         predicted = compose(pred_cum, invert_matrix(st.key_cum))
         res, why = searcher.measure(key, gray, feats, predicted, None, n, "prior", ref_rate)
         reasons.append(why)
@@ -579,7 +575,7 @@ def _finish_row(row, st: State, mpp):
     cum = row["_cum"]
     if cum is None:
         return
-    cum = _similar(cum)
+    cum = nearest_similarity(cum)
     row["_cum"] = cum
     row["matrix"] = cum.ravel().tolist()
     x, y, hd, s = pose_fields(cum, st.shape, st.heading if st.last_pose is not None else 0.0)

@@ -38,7 +38,7 @@ class Motion:
     dx, dy : float
         Shift of the previous frame's centre, in current-frame pixels.
     angle : float
-        Rotation in degrees (counter-clockwise as displayed), in (-180, 180].
+        Rotation in degrees (counter-clockwise as displayed), in [-180, 180).
     scale : float
         Size change (> 1: the camera came closer).
     confidence : float
@@ -163,8 +163,11 @@ def check_motion_size(shape, label: str = "frames") -> None:
 
 
 def frame_factor(shape, config: Config, scale_range) -> float:
-    """The working scale of a frame searched for in a frame of ``shape``
-    (the rule :meth:`Detector.search` applies to a whole-frame pattern)."""
+    """The working scale at which a frame of ``shape`` is searched for in
+    another: the image's longest side brought to ``Config.target_size``
+    (:func:`~seahough.core.preprocess.choose_factor`, with the frame's
+    diagonal as the pattern's size, which never binds for frames of 64 px
+    or more). The dead reckoning computes each frame's features once at it."""
     h, w = shape[:2]
     return choose_factor(shape, config, math.hypot(w, h), min(scale_range[0], 1.0))
 

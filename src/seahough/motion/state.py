@@ -11,12 +11,7 @@ import numpy as np
 from ..config import Config, OdometryTuning
 from ..core.pattern import Pattern
 from ..errors import SeahoughError
-from ..geometry import Similarity, compose, invert_matrix, overlap
-
-
-def power(m, t: float) -> np.ndarray:
-    """The similarity matrix ``m`` applied ``t`` times (any real ``t``: roots too)."""
-    return Similarity.from_columns(m).power(t).matrix
+from ..geometry import compose, invert_matrix, matrix_power, overlap
 
 
 @dataclass
@@ -64,9 +59,9 @@ def advance(st: State, row: dict, tuning: OdometryTuning) -> None:
     ref = row["ref"]
     rcum = ref_cum(st, ref)
     if st.last_pose_measured and st.last_pose is not None:
-        st.vel = power(compose(cum, invert_matrix(st.last_pose_cum)), 1.0 / (i - st.last_pose))
+        st.vel = matrix_power(compose(cum, invert_matrix(st.last_pose_cum)), 1.0 / (i - st.last_pose))
     else:
-        st.vel = power(compose(cum, invert_matrix(rcum)), 1.0 / max(i - ref, 1))
+        st.vel = matrix_power(compose(cum, invert_matrix(rcum)), 1.0 / max(i - ref, 1))
     if ref != st.key:
         st.key, st.key_cum, st.key_rate = ref, rcum, None
     rate = row["score"] / max(row["overlap"], 1e-6)
