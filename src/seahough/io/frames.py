@@ -124,7 +124,7 @@ def _is_video(p: Path) -> bool:
     return p.suffix.lower() in VIDEO_EXTENSIONS
 
 
-def _split_video_ref(s: str):
+def split_video_ref(s: str):
     """``("video.mp4", 12)`` for ``"video.mp4#12"``, else None."""
     m = re.match(r"^(.*)#(\d+)$", s)
     if m and _is_video(Path(m.group(1))):
@@ -223,7 +223,7 @@ def list_frames(frames) -> list:
             if Path(s).is_dir():
                 raise ParameterError(f"{s}: a folder inside a list of frames; give the "
                                      "folder alone")
-            if not Path(s).exists() and _split_video_ref(s) is None:
+            if not Path(s).exists() and split_video_ref(s) is None:
                 raise ParameterError(f"{s}: no such file")
             if _is_video(Path(s)) and Path(s).is_file():
                 out.extend(_video_frames(Path(s)))   # each video of a list: its frames
@@ -314,13 +314,13 @@ class FrameReader:
     def is_video(self, i: int) -> bool:
         """Is frame ``i`` a frame of a video (``"video.mp4#<k>"``)?"""
         it = self.items[i]
-        return not isinstance(it, np.ndarray) and _split_video_ref(str(it)) is not None
+        return not isinstance(it, np.ndarray) and split_video_ref(str(it)) is not None
 
     def time(self, i: int) -> float | None:
         it = self.items[i]
         if isinstance(it, np.ndarray):
             return None
-        ref = _split_video_ref(str(it))
+        ref = split_video_ref(str(it))
         if ref is not None:
             fps = self._video_fps(ref[0])
             return ref[1] / fps if fps > 0 else None
@@ -348,7 +348,7 @@ class FrameReader:
         it = self.items[i]
         if isinstance(it, np.ndarray):
             return _pixels_fingerprint(it)
-        if _split_video_ref(str(it)) is not None:
+        if split_video_ref(str(it)) is not None:
             return "" if image is None else _pixels_fingerprint(image)
         return _file_fingerprint(os.fspath(it))
 
@@ -357,7 +357,7 @@ class FrameReader:
         it = self.items[i]
         if isinstance(it, np.ndarray):
             return it
-        ref = _split_video_ref(str(it))
+        ref = split_video_ref(str(it))
         if ref is None:
             _entry(os.fspath(it))
             return read_image(it, max_pixels=self.max_pixels, max_memory_mb=self.max_memory_mb)

@@ -25,7 +25,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 from ..errors import ParameterError, SeahoughError, WriteError
-from ..io.frames import _split_video_ref, printable
+from ..io.frames import split_video_ref, printable
 
 try:                                  # POSIX; elsewhere runs are not locked
     import fcntl
@@ -100,7 +100,7 @@ def same_frame(old_name: str, old_cwd: str | None, new_name: str) -> bool:
         return True
 
     def resolved(name, cwd):
-        ref = _split_video_ref(name)
+        ref = split_video_ref(name)
         base, k = ref if ref is not None else (name, None)
         return os.path.realpath(os.path.join(cwd or os.getcwd(), base)), k
 
