@@ -54,7 +54,8 @@ class SearchTuning:
     icp_points : int
         Pattern points the candidate ICPs iterate on (all score at the end).
     icp_iterations : int
-        Iterations of each candidate ICP stage.
+        Iterations of each stage of a candidate's main ICP (the short ICPs
+        that pick a scale seed run 3).
     max_radius : float
         Largest first match radius of a candidate ICP (working px).
     look_radius : float

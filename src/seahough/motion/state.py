@@ -19,7 +19,7 @@ class State:
     """Everything the next frame needs, rebuilt from the rows alone (resume)."""
 
     shape: tuple | None = None          # (h, w) of the first readable frame
-    box: tuple | None = None            # its content box (see motion.content_box)
+    box: tuple | None = None            # its content box (see motion.pair.content_box)
     key: int | None = None              # keyframe index and its cumulative matrix
     key_cum: np.ndarray | None = None
     key_rate: float | None = None       # score / overlap of the first frame measured on it

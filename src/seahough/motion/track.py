@@ -120,9 +120,6 @@ def row_to_csv(row: dict, columns) -> dict:
         v = row.get(k)
         if k in ("matrix", "pair_matrix"):
             out[k] = "" if v is None else matrix_text(np.asarray(v).reshape(2, 3))
-        elif k in ("x", "y", "x_m", "y_m", "heading", "scale", "dx", "dy", "rotation",
-                   "scale_change", "confidence", "score", "overlap", "time"):
-            out[k] = _fmt(v)
         elif k == "ms":
             out[k] = _fmt(v, 2)
         else:
