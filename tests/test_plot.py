@@ -401,3 +401,155 @@ def test_accumulator_without_planes_says_why():
         "no accumulator: pattern larger than the image"]
     fig = plot.plot_accumulator(None, [])
     assert "no edges" in fig.axes[0].texts[0].get_text()
+
+
+# ------------------------------------------------- large photos, PNGs, threads
+def _big_photo():
+    """A 2400 x 1350 colour photo: a blue-brown left half, an orange right
+    half and a light grey box turned by 30 degrees in the left half; the box
+    as a detection (its true corners)."""
+    img = np.empty((1350, 2400, 3), np.uint8)
+    img[:, :1200] = (90, 60, 30)
+    img[:, 1200:] = (30, 160, 200)
+    box = cv2.boxPoints(((600.0, 700.0), (500.0, 300.0), -30.0))
+    cv2.fillPoly(img, [np.round(box).astype(np.int32)], (235, 235, 235))
+    det = types.SimpleNamespace(kind="object", outline=[box.astype(float)], x=600.0, y=700.0,
+                                score=0.9, confidence=0.8, scale=1.0, angle=30.0,
+                                line_angle=None, line_offset=None)
+    return img, det
+
+
+def _png_xy(fig, ax, x, y):
+    """The PNG pixel (column, row) where ``ax`` draws the data point (x, y)."""
+    px, py = ax.transData.transform((x, y))
+    return int(round(px - 0.5)), int(round(fig.bbox.height - py - 0.5))
+
+
+def test_a_large_photo_is_drawn_shrunk_to_its_size_on_the_picture(tmp_path):
+    img, det = _big_photo()
+    fig = plot.plot_detections(img, [det], tmp_path / "big.png", title="big")
+    im = read_png(tmp_path / "big.png")
+    assert (im.shape[1], im.shape[0]) == plot.detections_size(img.shape) == (1000, 606)
+    ax = fig.axes[0]
+    # the figure keeps the photo at the size it is drawn (900 x 506 px),
+    # not the 2400 x 1350 array
+    assert ax.images[0].get_array().shape == (506, 900, 3)
+    # drawn in place: the two halves' colours each side of x = 1199.5, the
+    # box inside its outline, the red outline on its corners
+    c, r = _png_xy(fig, ax, 1199.5, 300)
+    assert np.abs(im[r, c - 2].astype(int) - (90, 60, 30)).max() < 12, im[r, c - 2]
+    assert np.abs(im[r, c + 2].astype(int) - (30, 160, 200)).max() < 12, im[r, c + 2]
+    for x, y in ((300, 300), (2000, 1200), (600, 700)):
+        c, r = _png_xy(fig, ax, x, y)
+        want = img[y, x] if (x, y) != (600, 700) else (235, 235, 235)
+        if (x, y) == (600, 700):          # the centre: under the origin's "+"; beside it
+            c += 15
+        assert np.abs(im[r, c].astype(int) - want).max() < 12, (x, y, im[r, c], want)
+    red = np.abs(im.astype(int) - [45, 45, 255]).max(axis=2) < 40
+    for x, y in det.outline[0]:
+        c, r = _png_xy(fig, ax, x, y)
+        assert red[r - 4:r + 5, c - 4:c + 5].any(), (x, y)
+
+
+def test_a_small_image_is_not_resampled_before_drawing(box_search):
+    img, pattern, res = box_search
+    fig = plot.plot_detections(img, res.detections, pattern=pattern)
+    assert fig.axes[0].images[0].get_array().shape == img.shape   # 320 x 240: drawn as it is
+
+
+def test_a_large_pattern_is_drawn_shrunk_to_its_inset(tmp_path):
+    big = np.full((1600, 1600), 30, np.uint8)
+    cv2.rectangle(big, (200, 200), (1399, 1399), 220, -1)
+    pattern = seahough.Pattern.from_image(big)
+    for shape in ((480, 640), (600, 80)):            # in a corner; beside a narrow image
+        fig = plot.plot_detections(np.full(shape, 60, np.uint8), [], tmp_path / "p.png",
+                                   pattern=pattern)
+        inset = (fig.axes[0].child_axes or fig.axes[1:])[0]
+        box = inset.get_window_extent(fig.canvas.get_renderer())
+        a = inset.images[0].get_array()
+        assert max(a.shape) <= max(box.width, box.height) + 1 < 200, (a.shape, box)
+        assert a.max() > 200 and a.min() < 40           # the pattern, not a blur of it
+        assert inset.get_xlim() == (-0.5, 1599.5)        # its outline's coordinates kept
+
+
+def test_edges_of_a_full_resolution_working_image(tmp_path):
+    from seahough.core.features import extract_features
+
+    gray = np.full((1200, 1600), 40, np.float32)
+    gray[400:800, 500:1100] = 220
+    feats = extract_features(gray, 1.0, seahough.Config())
+    assert feats.gradients.magnitude.shape == (1200, 1600)
+    fig = plot.plot_edges(gray.astype(np.uint8), feats, tmp_path / "edges.png")
+    im = read_png(tmp_path / "edges.png")
+    assert im.shape[:2] == (560, 1300)
+    ax1, ax2 = fig.axes[0], fig.axes[1]
+    for ax in (ax1, ax2):                   # both drawn at 520 x 390 px, not 1600 x 1200
+        assert ax.images[0].get_array().shape == (390, 520)
+    c, r = _png_xy(fig, ax1, 800, 600)      # the box, bright, in the working image
+    assert im[r, c].min() > 200 and im[r, 20 + c - 130].max() < 60
+    # the box's top edge: strong gradients, key points and segments; nothing above it
+    c, r = _png_xy(fig, ax2, 800, 399.5)
+    assert (im[r - 3:r + 4, c - 40:c + 40].max(axis=2) > 150).sum() > 80
+    c, r = _png_xy(fig, ax2, 800, 200)
+    assert im[r - 3:r + 4, c - 40:c + 40].max() < 30
+
+
+def test_png_is_what_savefig_draws_and_other_formats_still_save(tmp_path, box_search):
+    import io
+
+    img, pattern, res = box_search
+    fig = plot.plot_detections(img, res.detections, tmp_path / "det.png", pattern=pattern)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=plot.DPI)
+    want = cv2.imdecode(np.frombuffer(buf.getvalue(), np.uint8), cv2.IMREAD_COLOR)
+    assert np.array_equal(cv2.imread(str(tmp_path / "det.png"), cv2.IMREAD_COLOR), want)
+    plot.plot_accumulator(res.planes, res.detections, tmp_path / "acc.pdf")
+    assert (tmp_path / "acc.pdf").read_bytes().startswith(b"%PDF")
+    plot.plot_edges(img, res.features, tmp_path / "edges")          # no extension: a PNG
+    assert cv2.imread(str(tmp_path / "edges")).shape[:2] == (560, 1300)
+
+
+def test_pictures_drawn_from_several_threads_are_those_drawn_one_by_one(tmp_path, box_search):
+    """For ``detect --workers N``: figures share no state, so threads drawing
+    at once make the same pictures as one thread."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    img, pattern, res = box_search
+    rope, _ = sim.rope_scene((240, 320), seed=4, source="procedural")
+
+    def draw(k, folder):
+        folder.mkdir()
+        if k % 2:
+            plot.plot_detections(img, res.detections, folder / "o.png", pattern=pattern)
+            plot.plot_accumulator(res.planes, res.detections, folder / "a.png")
+            plot.plot_edges(img, res.features, folder / "e.png")
+        else:
+            plot.plot_detections(rope, [], folder / "o.png", title="rope")
+        return sorted(p.name for p in folder.iterdir())
+
+    alone = [draw(k, tmp_path / f"one{k}") for k in range(2)]
+    with ThreadPoolExecutor(4) as pool:
+        together = list(pool.map(lambda k: draw(k, tmp_path / f"many{k}"), range(4)))
+    assert together == alone * 2
+    for k in range(4):
+        for name in together[k]:
+            a = cv2.imread(str(tmp_path / f"one{k % 2}" / name))
+            b = cv2.imread(str(tmp_path / f"many{k}" / name))
+            assert a is not None and np.array_equal(a, b), (k, name)
+
+
+def test_pictures_do_not_use_pyplot():
+    """No pyplot (its global current figure is not thread-safe, and it would
+    pick a GUI backend): checked in a fresh process."""
+    import subprocess
+    import sys
+
+    code = ("import sys, numpy as np\n"
+            "from seahough import viz\n"
+            "fig = viz.plot_detections(np.zeros((48, 64), np.uint8), [])\n"
+            "viz.plot_accumulator(None, [])\n"
+            "viz.plot_trajectory([])\n"
+            "fig.canvas.draw()\n"
+            "print('matplotlib.pyplot' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False", out.stdout + out.stderr

@@ -5,7 +5,11 @@ draws on a fresh :class:`matplotlib.figure.Figure` made without
 :mod:`matplotlib.pyplot` (so no GUI backend is needed and no global figure
 state is left behind; PNGs are rendered by Agg), saves it as a PNG when
 given ``path`` and returns the figure. The PNG sizes are fixed (see each
-function) so that pictures line up in reports and tests.
+function) so that pictures line up in reports and tests. A photo larger
+than it is drawn is shrunk to its drawn size first (an area average), so a
+4K photo costs about what a 640x480 one does; nothing is shared between
+calls, so pictures can be drawn from several threads (matplotlib renders
+one figure at a time: threads are safe, not faster).
 
 - :mod:`.detections`: :func:`plot_detections` (the image, what was found)
   and :func:`detections_size`;

@@ -13,7 +13,7 @@ from matplotlib.offsetbox import AnchoredOffsetbox, TextArea, VPacker
 
 from ..geometry import format_angle
 from ._figure import COLOURS, DPI, _OUTLINE, _TEXT_OUTLINE, _as_display, _figure, _finish, \
-    _show, _text_size
+    _imshow, _show, _text_size
 
 _IMAGE_BOX = 900        # longer side of an image drawn by plot_detections, px
 _MARGINS = (75, 25, 45, 55)   # left, right, bottom, top margins around it, px
@@ -151,9 +151,10 @@ def _label_list(ax, items, corner: int = 1, at=None):
     return anchored
 
 
-def _draw_pattern(ins, pattern):
-    """The pattern's image and outline in the axes ``ins``, titled."""
-    ins.imshow(pattern.image, cmap="gray", vmin=0, vmax=255)
+def _draw_pattern(ins, pattern, box_px):
+    """The pattern's image and outline in the axes ``ins`` (``box_px``, its
+    size in px: a larger pattern image is shrunk to it first), titled."""
+    _imshow(ins, pattern.image, box_px, cmap="gray", vmin=0, vmax=255)
     for o in pattern.outline:
         o = np.asarray(o, float)
         if pattern.closed and len(o) > 2:
@@ -167,9 +168,9 @@ def _draw_pattern(ins, pattern):
     return ins
 
 
-def _pattern_inset(ax, pattern, corner: int):
-    """The pattern in an inset of at most a fifth of ``ax`` in an image corner
-    (0 TL, 1 TR, 2 BR, 3 BL)."""
+def _pattern_inset(ax, pattern, corner: int, ax_px):
+    """The pattern in an inset of at most a fifth of ``ax`` (drawn ``ax_px``
+    = (width, height) px) in an image corner (0 TL, 1 TR, 2 BR, 3 BL)."""
     size = 0.2
     pos = {0: (0.015, 0.955 - size), 1: (0.985 - size, 0.955 - size),
            2: (0.985 - size, 0.015), 3: (0.015, 0.015)}[corner]
@@ -178,7 +179,8 @@ def _pattern_inset(ax, pattern, corner: int):
     bw, bh = (size, size / aspect) if aspect >= 1 else (size * aspect, size)
     x0 = pos[0] + (size - bw if corner in (1, 2) else 0)
     y0 = pos[1] + (size - bh if corner in (0, 1) else 0)
-    return _draw_pattern(ax.inset_axes([x0, y0, bw, bh]), pattern)
+    return _draw_pattern(ax.inset_axes([x0, y0, bw, bh]), pattern,
+                         (bw * ax_px[0], bh * ax_px[1]))
 
 
 def _pattern_beside(fig: Figure, pattern, x0: float, y_top: float, max_w: float):
@@ -189,7 +191,7 @@ def _pattern_beside(fig: Figure, pattern, x0: float, y_top: float, max_w: float)
     bw, bh = (side, side * ph / pw) if pw >= ph else (side * pw / ph, side)
     fw, fh = fig.get_size_inches() * fig.dpi
     y0 = y_top - 16 - bh
-    return _draw_pattern(fig.add_axes([x0 / fw, y0 / fh, bw / fw, bh / fh]), pattern)
+    return _draw_pattern(fig.add_axes([x0 / fw, y0 / fh, bw / fw, bh / fh]), pattern, (bw, bh))
 
 
 def _image_px(shape_wh, box_wh) -> tuple[float, float]:
@@ -287,7 +289,7 @@ def _notes(fig, ax, detections, pattern, corners, wh, box_wh):
                 fontsize=size, fontweight="bold", color="white", path_effects=_TEXT_OUTLINE,
                 bbox=dict(boxstyle="round,pad=0.4", fc="#b00020", ec="white", alpha=0.8))
     if pattern is not None:
-        _pattern_inset(ax, pattern, corners[0])
+        _pattern_inset(ax, pattern, corners[0], (dw, dh))
 
 
 def _notes_below(fig, items, pattern, top_left, width, nf_size):
@@ -322,7 +324,9 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None) -
     Parameters
     ----------
     image : ndarray or path
-        The searched image: BGR/BGRA (shown in its colours) or grey.
+        The searched image: BGR/BGRA (shown in its colours) or grey; one
+        larger than drawn (900 px on its longer side) is shrunk to that size
+        by an area average before it is drawn.
     detections : list of Detection
         From :meth:`seahough.Detector.detect`; best first. Objects are drawn
         with their closed outline; lines (``kind == "line"``) across the
@@ -369,7 +373,7 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None) -
     left, right, bottom, top = _MARGINS
     iw, ih = fw - left - right, fh - bottom - top
     ax = fig.add_axes([left / fw, bottom / fh, iw / fw, ih / fh])
-    _show(ax, disp, colour)
+    _show(ax, disp, colour, (iw, ih))
     ax.set_xlabel("x (px)")
     ax.set_ylabel("y (px)")
     detections = list(detections or [])

@@ -7,7 +7,7 @@ import numpy as np
 from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 
-from ._figure import _figure, _finish
+from ._figure import _figure, _finish, _imshow
 
 
 def plot_edges(image, features, path=None, *, title=None) -> Figure:
@@ -23,6 +23,8 @@ def plot_edges(image, features, path=None, *, title=None) -> Figure:
         working image is in ``features``).
     features : Features
         ``SearchResult.features`` (or :func:`seahough.core.features.extract_features`).
+        A working image larger than drawn (520 x 426 px at most) is shrunk
+        to that size by an area average before it is drawn.
     path : str or Path, optional
         Where to save the PNG.
     title : str, optional
@@ -64,11 +66,12 @@ def plot_edges(image, features, path=None, *, title=None) -> Figure:
     ax1 = fig.add_axes([0.05, 0.1, 0.40, top - 0.1])
     ax2 = fig.add_axes([0.52, 0.1, 0.40, top - 0.1])
     cax = fig.add_axes([0.93, 0.1, 0.012, top - 0.1])
-    ax1.imshow(g.image, cmap="gray", vmin=0, vmax=255)
+    box = (0.40 * 1300, (top - 0.1) * 560)     # px of each image's axes
+    _imshow(ax1, np.asarray(g.image), box, cmap="gray", vmin=0, vmax=255)
     ax1.set_title(f"working image ({w} x {h} px, factor {g.factor:.2f})", fontsize=11)
     vmax = float(np.percentile(mag, 99.5)) if mag.size else 1.0
     # a flat image: a plain 0-1 scale rather than a 1e-6 one
-    im = ax2.imshow(mag, cmap="gray", vmin=0, vmax=vmax if vmax >= 1.0 else 1.0)
+    im = _imshow(ax2, mag, box, cmap="gray", vmin=0, vmax=vmax if vmax >= 1.0 else 1.0)
     cb = fig.colorbar(im, cax=cax)
     cb.set_label("Scharr gradient magnitude (clipped at 99.5 %)")
     seg = features.segments
