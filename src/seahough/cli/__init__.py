@@ -1,16 +1,20 @@
-"""The ``seahough`` command line: detect, odometry, simulate, demo.
+"""The ``seahough`` command line: detect, odometry, simulate, demo, survey.
 
 Errors a user can cause (a missing or broken file, a bad parameter) print
 one line ``seahough: error: ...`` on stderr and exit with status 2, never a
 traceback. See ``seahough COMMAND --help``.
 
 One module per command (:mod:`.detect`, :mod:`.odometry`, :mod:`.simulate`,
-:mod:`.demo`), what they share in :mod:`._common`; the work itself is the
-library's.
+:mod:`.demo`, :mod:`.survey`), what they share in :mod:`._common`; the work
+itself is the library's. A command's module (and what it needs: Numba,
+OpenCV, matplotlib, Dask) is imported only when that command runs, inside
+:func:`main`, so ``seahough --help`` starts at once and a Ctrl-C during the
+imports is an interruption like any other.
 """
 
 from __future__ import annotations
 
+import importlib
 import os
 import sys
 
@@ -18,13 +22,88 @@ import click
 
 from .. import __version__
 from ..errors import SeahoughError
-from . import demo, detect, odometry, simulate
 from ._common import PROG, _err, _Fail
 
 __all__ = ["cli", "main"]
 
+#: Every command: its one-line help as ``seahough --help`` lists it (the
+#: command's own ``short_help`` or first docstring sentence: a test keeps
+#: them equal), and the extra that installs what it needs beyond the base.
+#: The command is the attribute of the same name of ``seahough.cli.<name>``.
+COMMANDS = {
+    "demo": ("A tour that needs no files: simulate, detect, dead-reckon.", None),
+    "detect": ("Find PATTERN in each IMAGE.", None),
+    "odometry": ("Dead reckoning: the camera's path from overlapping frames.", None),
+    "simulate": ("Write synthetic underwater scenes with exact ground truth.", None),
+    "survey": ("Thousands of photos on every core or a Dask cluster, into Parquet.", "survey"),
+}
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
+
+class CommandUnavailable(click.ClickException):
+    """A command whose module, or a module it needs, is not installed."""
+
+    exit_code = 2
+
+
+def load_command(name: str) -> click.Command:
+    """Import ``seahough.cli.<name>`` and return its command ``name``.
+
+    Raises
+    ------
+    CommandUnavailable
+        The module, or one it imports, is missing (one line, exit status 2).
+
+    Examples
+    --------
+    >>> load_command("simulate").name
+    'simulate'
+    """
+    module = f"{__name__}.{name}"
+    try:
+        return getattr(importlib.import_module(module), name)
+    except ModuleNotFoundError as e:
+        if e.name == module:
+            raise CommandUnavailable(f"{name}: this installation has no such command "
+                                     f"(no module {module})") from None
+        extra = COMMANDS.get(name, (None, None))[1]
+        hint = (f"pip install 'seahough[{extra}]'" if extra else
+                "reinstall seahough with its dependencies")
+        raise CommandUnavailable(f"{name}: {e.msg} ({hint})") from None
+
+
+class _LazyGroup(click.Group):
+    """A group whose commands are imported on first use.
+
+    ``seahough --help`` lists them from :data:`COMMANDS` without importing
+    any; commands added with :meth:`add_command` (or put in ``commands``)
+    come first, as in a plain :class:`click.Group`.
+    """
+
+    _listing = False
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted(set(self.commands) | set(COMMANDS))
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        cmd = self.commands.get(cmd_name)
+        if cmd is not None or cmd_name not in COMMANDS:
+            return cmd
+        if self._listing:   # the help's list: a stand-in with the one-line help
+            return click.Command(cmd_name, short_help=COMMANDS[cmd_name][0])
+        cmd = load_command(cmd_name)
+        self.add_command(cmd, cmd_name)
+        return cmd
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        self._listing = True
+        try:
+            super().format_commands(ctx, formatter)
+        finally:
+            self._listing = False
+
+
+@click.group(cls=_LazyGroup,
+             context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
 @click.version_option(__version__, "--version", "-V", prog_name=PROG,
                       message="%(prog)s %(version)s")
 def cli():
@@ -37,12 +116,6 @@ def cli():
     unreadable file, bad parameter), one line on stderr.
     Try `seahough demo` for a tour that needs no files.
     """
-
-
-cli.add_command(detect.detect)
-cli.add_command(odometry.odometry)
-cli.add_command(simulate.simulate)
-cli.add_command(demo.demo)
 
 
 def _interrupted(exc: BaseException) -> bool:

@@ -6,7 +6,9 @@ written), one module a stage. Everything else in the package is numpy/OpenCV.
 - :mod:`.matching`: point matching, snapping, ICP
 - :mod:`._common`: the direction test they share, and the conventions
 - :mod:`._cache`: where the compiled kernels are cached (a private temporary
-  folder when neither the package folder nor HOME can be written)
+  folder when neither the package folder nor HOME can be written), seeded
+  with the compiled kernels a wheel ships (``seahough._warmup``, run when
+  ``pip install .`` builds the wheel)
 """
 
 from ._cache import kernel_cache

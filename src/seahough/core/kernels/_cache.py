@@ -15,12 +15,23 @@ the case of a system or container install run by a service user, so
    :class:`KernelCacheWarning`;
 3. else no cache: the kernels are compiled in every process (about 10 s),
    said once too.
+
+A wheel built by ``pip install .`` carries the kernels compiled (``setup.py``
+runs :mod:`seahough._warmup` in the build), in the ``__pycache__`` beside
+them. When Numba's cache is elsewhere (a read-only install: HOME or the
+private folder above; or a ``NUMBA_CACHE_DIR``), :func:`seed_cache` first
+copies those files there, once, so that such an install starts without
+compiling too.
 """
 
 from __future__ import annotations
 
 import contextlib
+import glob
+import hashlib
 import os
+import pickle
+import shutil
 import stat
 import tempfile
 import warnings
@@ -131,6 +142,8 @@ def kernel_cache():
     try:
         where = _locate(before)
         CACHE = where is not None
+        if where is not None:
+            seed_cache(where)
         yield where
     finally:
         numba.config.CACHE_DIR = before
@@ -155,3 +168,92 @@ def _locate(before: str) -> str | None:
     _say(f"{why}, nor in the temporary folder: the kernels are compiled anew in every "
          "process, about 10 s (set NUMBA_CACHE_DIR to a writable folder)")
     return None
+
+
+# --------------------------------------------------------------------------- shipped cache
+def _index_stamp(path: str):
+    """``(numba version, source stamp)`` of a Numba cache index, or None
+    when it cannot be read."""
+    try:
+        with open(path, "rb") as f:
+            version = pickle.load(f)
+            stamp = pickle.loads(f.read())[0]
+    except Exception:  # noqa: BLE001 - a missing, partial or foreign file: not usable
+        return None
+    return version, stamp
+
+
+def _copy(src: str, dst: str) -> None:
+    """``src`` to ``dst``, atomically (a process reading ``dst`` meanwhile
+    sees the old file or the new one)."""
+    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(dst), prefix=".seed-")
+    try:
+        with os.fdopen(fd, "wb") as out, open(src, "rb") as inp:
+            shutil.copyfileobj(inp, out)
+        os.replace(tmp, dst)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.remove(tmp)
+        raise
+
+
+def seed_cache(cache_dir: str, kernels_dir: str | None = None) -> int:
+    """Copy the compiled kernels shipped in ``<kernels_dir>/__pycache__``
+    into ``cache_dir``, the folder Numba caches those kernels in now.
+
+    A kernel's files are copied when the shipped index is valid for its
+    source file as it is (Numba's version, the sha256 of the source, as
+    Numba stamps them) and ``cache_dir`` has no valid index of its own for
+    it; so it happens once, and never replaces what Numba compiled there.
+    Nothing to copy, or a folder that cannot be written, is not an error.
+
+    Parameters
+    ----------
+    cache_dir : str
+        Where Numba looks for the kernels' cache (see :func:`cache_path`).
+    kernels_dir : str, optional
+        The folder of the kernels' sources; default this one.
+
+    Returns
+    -------
+    int
+        The number of kernels whose cache files were copied.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as nothing_shipped, \\
+    ...      tempfile.TemporaryDirectory() as cache:
+    ...     seed_cache(cache, nothing_shipped)
+    0
+    """
+    here = os.path.abspath(kernels_dir or os.path.dirname(__file__))
+    shipped = os.path.join(here, "__pycache__")
+    if os.path.abspath(cache_dir) == shipped:
+        return 0
+    copied = 0
+    hashes: dict[str, bytes | None] = {}
+    for index in sorted(glob.glob(os.path.join(glob.escape(shipped), "*.nbi"))):
+        name = os.path.basename(index)
+        source = os.path.join(here, name.partition(".")[0] + ".py")
+        if source not in hashes:
+            try:
+                with open(source, "rb") as f:
+                    hashes[source] = hashlib.sha256(f.read()).digest()
+            except OSError:
+                hashes[source] = None
+        valid = (numba.__version__, hashes[source])
+        if hashes[source] is None or _index_stamp(index) != valid:
+            continue
+        target = os.path.join(cache_dir, name)
+        if _index_stamp(target) == valid:
+            continue
+        base = name[:-len(".nbi")]
+        try:
+            for data in glob.glob(os.path.join(glob.escape(shipped), base + ".*.nbc")):
+                _copy(data, os.path.join(cache_dir, os.path.basename(data)))
+            _copy(index, target)        # last: the index names the data files
+        except OSError:
+            return copied
+        copied += 1
+    return copied
