@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -129,6 +130,29 @@ def _table(rows, header, left=False) -> list[str]:
                  for i, c in enumerate(r)]
         out.append("  " + "  ".join(cells).rstrip())
     return out
+
+
+# -------------------------------------------------------------------------- workers
+def default_workers() -> int:
+    """All the cores this process may use (its CPU affinity mask where the
+    OS has one): the default of ``--workers``.
+
+    >>> default_workers() >= 1
+    True
+    """
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - macOS, Windows
+        return max(1, os.cpu_count() or 1)
+
+
+def workers_option(what: str):
+    """The ``--workers N`` option of a command (``what``: what runs at once);
+    None (not given) means :func:`default_workers`, and N < 1 is refused
+    with one line."""
+    return click.option(
+        "--workers", "-j", type=click.IntRange(min=1), default=None, metavar="N",
+        help=f"{what} (default: all cores, {default_workers()} here; 1: one at a time).")
 
 
 # -------------------------------------------------------------------------- parsing

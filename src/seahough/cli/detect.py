@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import inspect
 import time
+from collections import deque
+from contextlib import closing
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import click
@@ -14,7 +17,7 @@ from ..errors import SeahoughError
 from ..geometry import format_angle
 from ..io.frames import printable
 from ._common import (_Output, _dumps, _out_dir, _problem, _progress, _range_callback, _table,
-                      parse_pattern)
+                      default_workers, parse_pattern, workers_option)
 
 # the command's defaults are the library's, so that both give the same results
 _DET = {k: v.default for k, v in inspect.signature(Detector.__init__).parameters.items()}
@@ -35,6 +38,82 @@ def _detection_lines(dets) -> list[str]:
                  f"{d.score:.2f}", f"{d.confidence:.2f}", ",".join(d.flags))
                 for i, d in enumerate(dets)]
     return _table(rows, header)
+
+
+def _picture_stem(name: str, out_dir, stems: dict) -> str | None:
+    """The pictures' file stem of image ``name`` (``<stem>_2`` for the second
+    image of that stem, and so on, counted in ``stems``); None without
+    ``--out``."""
+    if out_dir is None:
+        return None
+    stem = Path(name).stem
+    k = stems.get(stem, 0)
+    stems[stem] = k + 1
+    return f"{stem}_{k + 1}" if k else stem
+
+
+def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir):
+    """Read and search one image, and write its pictures (``stem`` given):
+    ``(result, (h, w), ms, written)``, or the SeahoughError that stopped
+    reading or searching it. Runs in a worker thread: the kernels release
+    the GIL, and the pictures are drawn on their own Agg figures."""
+    from ..io.images import read_image
+
+    cfg = detector.config
+    t0 = time.perf_counter()
+    try:
+        img = read_image(name, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
+        res = detector.search(img)
+    except SeahoughError as e:
+        return e
+    ms = 1000.0 * (time.perf_counter() - t0)
+    written = {}
+    if stem is not None:
+        from .. import viz as plot
+
+        dets = res.detections
+        n = len(dets)
+        why = f" ({res.note})" if res.note else ""
+        head = f"{Path(name).name}: " + (f"not found{why}" if n == 0 else
+                                         f"{n} detection{'s' if n > 1 else ''}")
+        ov = out_dir / f"{stem}_overlay.png"
+        ac = out_dir / f"{stem}_accumulator.png"
+        ed = out_dir / f"{stem}_edges.png"
+        plot.plot_detections(img, dets, ov, pattern=pat, title=head)
+        plot.plot_accumulator(res.planes, dets, ac, title=f"{Path(name).name}: accumulator",
+                              note=res.note)
+        plot.plot_edges(img, res.features, ed, title=f"{Path(name).name}: what the detector sees")
+        written = {"overlay": str(ov), "accumulator": str(ac), "edges": str(ed)}
+    return res, img.shape[:2], ms, written
+
+
+def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int):
+    """``(name, outcome of _search_one)`` for each ``(name, stem)`` of
+    ``jobs``, in their order: one at a time with one worker, else ``workers``
+    threads with at most twice as many images in flight (read, searched or
+    done but not yet printed), so that memory stays bounded."""
+    if workers <= 1:
+        for name, stem in jobs:
+            yield name, _search_one(name, stem, detector, pat, out_dir)
+        return
+    pool = ThreadPoolExecutor(workers, thread_name_prefix="seahough-detect")
+    pending: deque = deque()
+    todo = iter(jobs)
+    try:
+        for name, stem in todo:
+            pending.append((name, pool.submit(_search_one, name, stem, detector, pat, out_dir)))
+            if len(pending) >= 2 * workers:
+                break
+        while pending:
+            name, fut = pending.popleft()
+            done = fut.result()
+            nxt = next(todo, None)
+            if nxt is not None:
+                pending.append((nxt[0], pool.submit(_search_one, *nxt, detector, pat, out_dir)))
+            yield name, done
+    finally:
+        # (an error, Ctrl-C or a closed pipe: what has not started is dropped)
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 @click.command(no_args_is_help=True)
@@ -73,8 +152,9 @@ def _detection_lines(dets) -> list[str]:
               "<stem>_accumulator.png (the vote planes) and <stem>_edges.png (gradients, key "
               "points and segments).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar or notes; results only.")
+@workers_option("Images searched at once, in threads; results are printed in the order given")
 def detect(pattern, images, scale_range, angle_range, max_results, min_score, min_confidence,
-           downscale, keypoints, equalize, polarity, mask, as_json, out, quiet):
+           downscale, keypoints, equalize, polarity, mask, as_json, out, quiet, workers):
     """Find PATTERN in each IMAGE.
 
     \b
@@ -94,6 +174,11 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     for several images when stderr is a terminal.
 
     \b
+    Images are searched --workers at a time (default: all cores), each
+    with the same results as alone; the results are printed in the order
+    of the IMAGE arguments.
+
+    \b
     Exit status: 0 the pattern was found in every image; 1 it was not found
     in some image; 2 bad input (the good images' results are still printed,
     each bad file gets one line on stderr).
@@ -102,8 +187,6 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     Example:
       seahough detect marker.png dive/*.jpg --scale-range 0.5 2 --json
     """
-    from ..io.images import read_image
-
     cfg_kw = {}
     if downscale is not None:
         cfg_kw["downscale"] = downscale
@@ -117,45 +200,35 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     detector = Detector(pat, scale_range, angle_range, config=cfg, max_results=max_results,
                         min_score=min_score, min_confidence=min_confidence)
     out_dir = _out_dir(out) if out is not None else None
-    bar = _progress(images, len(images), "detect", len(images) > 1 and not quiet)
+    workers = min(workers or default_workers(), len(images))
+    bar = _progress(None, len(images), "detect", len(images) > 1 and not quiet)
     say = _Output(bar)
-    n_bad = n_missing = 0
     stems: dict[str, int] = {}
-    for name in (bar if bar is not None else images):
-        t0 = time.perf_counter()
-        try:
-            img = read_image(name, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
-            res = detector.search(img)
-        except SeahoughError as e:
-            say.error(f"{printable(name)}: {printable(_problem(e, name))}")
+    jobs = [(name, _picture_stem(name, out_dir, stems)) for name in images]
+    with closing(_run_jobs(jobs, detector, pat, out_dir, workers)) as outcomes:
+        n_bad, n_missing = _report(outcomes, bar, say, as_json, quiet)
+    if bar is not None:
+        bar.close()
+    if n_bad:
+        return 2
+    return 1 if n_missing else 0
+
+
+def _report(outcomes, bar, say, as_json: bool, quiet: bool) -> tuple[int, int]:
+    """Print each image's outcome as it comes, in the order of the images;
+    returns how many files were bad and how many images had no detection."""
+    n_bad = n_missing = 0
+    for name, done in outcomes:
+        if bar is not None:
+            bar.update(1)
+        if isinstance(done, SeahoughError):
+            say.error(f"{printable(name)}: {printable(_problem(done, name))}")
             n_bad += 1
             continue
-        ms = 1000.0 * (time.perf_counter() - t0)
+        res, (h, w), ms, written = done
         dets = res.detections
         # why the search could not run (SearchResult.note), e.g. " (no edges)"
         why = f" ({res.note})" if res.note else ""
-        h, w = img.shape[:2]
-        written = {}
-        if out_dir is not None:
-            from .. import viz as plot
-
-            stem = Path(name).stem
-            k = stems.get(stem, 0)
-            stems[stem] = k + 1
-            if k:
-                stem = f"{stem}_{k + 1}"
-            n = len(dets)
-            head = f"{Path(name).name}: " + (f"not found{why}" if n == 0 else
-                                             f"{n} detection{'s' if n > 1 else ''}")
-            ov = out_dir / f"{stem}_overlay.png"
-            ac = out_dir / f"{stem}_accumulator.png"
-            ed = out_dir / f"{stem}_edges.png"
-            plot.plot_detections(img, dets, ov, pattern=pat, title=head)
-            plot.plot_accumulator(res.planes, dets, ac, title=f"{Path(name).name}: accumulator",
-                                  note=res.note)
-            plot.plot_edges(img, res.features, ed,
-                            title=f"{Path(name).name}: what the detector sees")
-            written = {"overlay": str(ov), "accumulator": str(ac), "edges": str(ed)}
         if not dets:
             n_missing += 1
         if as_json:
@@ -174,8 +247,4 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
                 say(f"{printable(name)}  {w}x{h}  not found{why}  ({ms:.0f} ms)")
             if written and not quiet:
                 say("  wrote " + ", ".join(printable(v) for v in written.values()))
-    if bar is not None:
-        bar.close()
-    if n_bad:
-        return 2
-    return 1 if n_missing else 0
+    return n_bad, n_missing

@@ -10,7 +10,7 @@ import click
 import numpy as np
 
 from ..io.frames import printable
-from ._common import _Fail, _dumps, _range_callback, _stderr_is_terminal
+from ._common import _Fail, _dumps, _range_callback, _stderr_is_terminal, workers_option
 
 
 def _number(v) -> bool:
@@ -90,8 +90,10 @@ def _odometry_summary(result, wall_s: float, unit: str) -> dict:
 @click.option("--quiet", "-q", is_flag=True,
               help="No progress bar (shown on stderr only when it is a terminal).")
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON object.")
+@workers_option("Threads: the pairs are measured in turn while the coming frames are read and "
+                "prepared ahead; the same results for any number")
 def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, angle_range,
-             resume, no_mosaic, quiet, as_json):
+             resume, no_mosaic, quiet, as_json, workers):
     """Dead reckoning: the camera's path from overlapping frames.
 
     \b
@@ -128,7 +130,8 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
     result = run_odometry(list(frames), out, metres_per_pixel=metres_per_pixel,
                           altitude=altitude, focal_px=focal_px, scale_range=scale_range,
                           angle_range=angle_range, resume=resume,
-                          progress=not quiet and _stderr_is_terminal(), mosaic=not no_mosaic)
+                          progress=not quiet and _stderr_is_terminal(), mosaic=not no_mosaic,
+                          workers=workers)
     summ = _odometry_summary(result, time.perf_counter() - t0, unit)
     status = 1 if summ["flagged_pairs"] else 0
     if as_json:

@@ -50,15 +50,16 @@ import numpy as np
 from .._validate import pair
 from ..config import ODOMETRY_CONFIG, Config, OdometryTuning
 from ..core.accumulator import check_ranges
-from ..errors import ImageError, ParameterError, SeahoughError, WriteError
+from ..errors import ParameterError, SeahoughError, WriteError
 from ..geometry import (angle_difference, apply_matrix, compose, frame_centre, invert_matrix,
                         matrix_power, matrix_to_pose, nearest_similarity, overlap,
                         shift_origin, wrap_angle)
 from ..io.frames import FrameReader, list_frames
 from ..io.images import to_gray
 from .mosaic import build_mosaic
+from .prefetch import Prefetch, check_workers, overlapped
 from .state import Frame, State, advance, ref_cum
-from .pair import check_motion_size, content_box, frame_factor, frame_features, search_pair
+from .pair import content_box, frame_factor, frame_features, search_pair
 from .runfiles import (RunFolder, check_kept_row, open_track, run_settings, settings_hash,
                        write_output, write_row)
 from .track import (CSV_BASE, CSV_CHECK, CSV_METRIC, CSV_MORE, OdometryResult, Totals,
@@ -208,7 +209,7 @@ class _Searcher:
 def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal_px=None,
                  scale_range=(0.9, 1.1), angle_range=(-20.0, 20.0), resume=False,
                  progress=True, mosaic=True, config=None,
-                 tuning: OdometryTuning | None = None) -> OdometryResult:
+                 tuning: OdometryTuning | None = None, workers: int | None = None) -> OdometryResult:
     """Dead reckoning over a sequence of down-looking frames.
 
     Parameters
@@ -251,6 +252,10 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     tuning : seahough.config.OdometryTuning, optional
         The keyframe, prior and fallback policy (the numbers of the notes
         below are its defaults).
+    workers : int, optional
+        Threads (default: all cores): the pairs are measured in turn while the
+        coming frames are read and given their features ahead (:mod:`.prefetch`);
+        the same rows for any number (1: all in the calling thread, as before).
 
     Returns
     -------
@@ -325,6 +330,7 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     scale_range, _ = check_ranges(scale_range, (0.0, 0.0))
     angle_range = pair("angle_range", angle_range)  # kept as given: a window around 0
     mpp = resolve_metres_per_pixel(metres_per_pixel, altitude, focal_px)
+    workers = check_workers(workers)
     items = list_frames(frames)
     reader = FrameReader(items, cfg.max_pixels, cfg.max_memory_mb)
     settings = run_settings(scale_range, angle_range, mpp, cfg, tuning)
@@ -334,13 +340,13 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
         try:
             return _run(run, reader, items, columns, settings, digest, resume, scale_range,
                         angle_range, mpp, cfg, tuning, progress, mosaic, t_start,
-                        (metres_per_pixel, altitude, focal_px))
+                        (metres_per_pixel, altitude, focal_px), workers)
         finally:
             reader.close()
 
 
 def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, resume,
-         scale_range, angle_range, mpp, cfg, tuning, progress, mosaic, t_start, given):
+         scale_range, angle_range, mpp, cfg, tuning, progress, mosaic, t_start, given, workers):
     """run_odometry in its locked output folder."""
     out, csv_path, json_path = run.path, run.csv, run.json
     run.check_writable(csv_path)
@@ -351,14 +357,14 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
     st = State()
     totals = Totals()
     frames_mem: dict = {}
-    searcher = None
+    searcher = ahead = None
 
     def load(i):
         if i is None:
             return None
         if i not in frames_mem:
-            gray_i = to_gray(reader.raw(i), max_pixels=cfg.max_pixels,
-                         max_memory_mb=cfg.max_memory_mb)
+            gray_i = to_gray((reader if ahead is None else ahead).raw(i),
+                             max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
             frames_mem[i] = Frame(i, searcher.crop(gray_i))
         return frames_mem[i]
 
@@ -420,6 +426,7 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
         searcher = _Searcher(st.box, scale_range, angle_range, cfg, tuning)
         load(st.key)
         load(st.prev)
+        load(st.meas)
 
     bar = None
     if progress:
@@ -427,6 +434,10 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
         # like the CLI's bars: only on a terminal (disable=None), wiped when done
         bar = tqdm(total=len(items), initial=n_resumed, file=sys.stderr, unit="frame",
                    desc="odometry", dynamic_ncols=True, disable=None, leave=False)
+    ahead = Prefetch(reader, n_resumed, max_pixels=cfg.max_pixels,
+                     max_memory_mb=cfg.max_memory_mb, workers=workers)
+    if searcher is not None:
+        ahead.use(searcher)
     try:
         for i in range(n_resumed, len(items)):
             t0 = time.perf_counter()
@@ -436,35 +447,26 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
                    "score": None, "overlap": None, "ref": None, "method": "", "status": "",
                    "matrix": None, "pair_matrix": None, "_cum": None,
                    "frame_hash": None, "settings_hash": digest}
-            gray = None
-            try:
-                raw = reader.raw(i)
-                row["frame_hash"] = reader.fingerprint(i, raw)
-                gray = to_gray(raw, max_pixels=cfg.max_pixels,
-                         max_memory_mb=cfg.max_memory_mb)
-                check_motion_size(gray.shape, "frame")
-                if st.shape is not None and gray.shape != st.shape:
-                    raise ImageError(f"size {gray.shape[1]}x{gray.shape[0]} differs from the "
-                                     f"first frame's {st.shape[1]}x{st.shape[0]}")
-            except (ImageError, OSError) as e:
-                if row["frame_hash"] is None:
-                    row["frame_hash"] = reader.fingerprint(i)
-                msg = " ".join(str(e).split())
-                if not isinstance(items[i], np.ndarray):
-                    msg = msg.replace(str(items[i]) + ": ", "")
+            prep = ahead.get(i)
+            row["frame_hash"], gray = prep.frame_hash, prep.gray
+            if prep.error is None and st.shape is not None and prep.shape != st.shape:
+                prep.error = (f"size {prep.shape[1]}x{prep.shape[0]} differs from the first "
+                              f"frame's {st.shape[1]}x{st.shape[0]}")
+            if prep.error is not None:
                 row["status"] = "unreadable"
-                row["flags"] = f"unreadable: {msg}"
+                row["flags"] = f"unreadable: {prep.error}"
                 gray = None
             if gray is not None:
                 if st.shape is None:
                     st.shape, st.box = gray.shape, content_box(gray)
                     searcher = _Searcher(st.box, scale_range, angle_range, cfg, tuning)
-                gray = searcher.crop(gray)
+                    ahead.use(searcher)
+                gray = Prefetch.finish(prep, searcher, st.key is not None).gray
                 if st.key is None:
                     row["status"] = "origin"
                     row["_cum"] = _IDENTITY.copy()
                 else:
-                    _measure_frame(row, i, gray, st, searcher, load)
+                    _measure_frame(row, i, gray, prep.features, st, searcher, load)
                 frames_mem[i] = frames_mem.get(i) or Frame(i, gray)
             _finish_row(row, st, mpp)
             row["ms"] = 1000.0 * (time.perf_counter() - t0)
@@ -481,19 +483,25 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
                 bar.update(1)
                 bar.set_postfix_str(f"flagged {totals.flagged}", refresh=False)
     finally:
+        ahead.close()
         fcsv.close()
         if bar is not None:
             bar.close()
     frames_mem.clear()
 
-    # ---- outputs (from the CSV, one row at a time)
-    mosaic_path = None
-    if mosaic and st.shape is not None:
-        mosaic_path = write_output(out / "mosaic.png", lambda: build_mosaic(
+    # ---- outputs (from the CSV, one row at a time; the two pictures at once)
+    def draw_mosaic():
+        if not (mosaic and st.shape is not None):
+            return None
+        return write_output(out / "mosaic.png", lambda: build_mosaic(
             csv_path, reader, st.shape, out / "mosaic.png"))
+
+    def draw_track():
+        return write_output(out / "trajectory.png", lambda: plot_track(
+            csv_path, out / "trajectory.png", bool(mpp)))
+
+    mosaic_path, trajectory_path = overlapped((draw_mosaic, draw_track), workers)
     reader.close()
-    trajectory_path = write_output(out / "trajectory.png", lambda: plot_track(
-        csv_path, out / "trajectory.png", bool(mpp)))
     summary = summarise(totals, items, mpp, scale_range, angle_range, cfg, tuning, n_resumed,
                         time.perf_counter() - t_start, *given)
     summary["outputs"] = {"csv": str(csv_path), "json": str(json_path),
@@ -509,9 +517,8 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
     return OdometryResult(None, summary, csv_path, json_path, mosaic_path, trajectory_path)
 
 
-def _measure_frame(row, i, gray, st: State, searcher: _Searcher, load):
+def _measure_frame(row, i, gray, feats, st: State, searcher: _Searcher, load):
     """Steps 1-3 of run_odometry's notes; fills ``row`` (status, matrix...)."""
-    feats = searcher.features(gray)
     key = load(st.key)
     ref_rate = float(np.median(st.rates)) if len(st.rates) >= 2 else None
     reasons = []

@@ -17,7 +17,7 @@ from ._cache import CACHE
 TWO_PI = 2.0 * math.pi
 
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=CACHE, nogil=True, inline="always")
 def _same_direction(a, b, tol, either):
     """Do directions ``a`` and ``b`` (radians, both in [0, 2 pi)) differ by at
     most ``tol`` (``either``: or by pi plus at most ``tol``)? Their difference

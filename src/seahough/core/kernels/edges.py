@@ -19,7 +19,7 @@ from ._common import TWO_PI, _same_direction
 _T22 = np.float32(0.41421356)
 
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=CACHE, nogil=True, inline="always")
 def _across(mag, i, w, ggx, ggy):
     """The magnitudes on either side of flat pixel ``i`` (image width ``w``,
     unsigned) across its edge, the gradient's direction quantised to 4 (as
@@ -40,7 +40,7 @@ def _across(mag, i, w, ggx, ggy):
     return m1, m2
 
 
-@njit(cache=CACHE)
+@njit(cache=CACHE, nogil=True)
 def edge_points(mag, gx, gy, phase, floor, mask):
     """Non-maximum suppression across the edge, with sub-pixel position.
 
@@ -124,7 +124,7 @@ def edge_points(mag, gx, gy, phase, floor, mask):
     return xs, ys, an, mg, ix, iy, index, nxs, nys
 
 
-@njit(cache=CACHE)
+@njit(cache=CACHE, nogil=True)
 def trace_segments(seeds, ix, iy, ang, nxs, nys, mag, index, steps, tol):
     """Trace a short segment along the edge from each seed edge point.
 
@@ -214,7 +214,7 @@ def trace_segments(seeds, ix, iy, ang, nxs, nys, mag, index, steps, tol):
     return out_seed[:k], out_e1[:k], out_e2[:k], out_ang[:k], out_len[:k]
 
 
-@njit(cache=CACHE)
+@njit(cache=CACHE, nogil=True)
 def spread_points(x, y, order, min_dist, max_count):
     """Greedy Poisson-disc thinning: visit points in ``order`` and keep one
     when no kept point lies within ``min_dist``. Returns kept indices."""

@@ -12,7 +12,7 @@ from ._cache import CACHE
 from ._common import TWO_PI, _same_direction
 
 
-@njit(cache=CACHE)
+@njit(cache=CACHE, nogil=True)
 def match_points(px, py, pang, a, b, tx, ty, ex, ey, eang, index, radius, ang_tol, either):
     """For each pattern point mapped by the pose, the nearest image edge point
     with a compatible gradient direction within ``radius`` pixels.
@@ -75,7 +75,7 @@ def match_points(px, py, pang, a, b, tx, ty, ex, ey, eang, index, radius, ang_to
     return out, dist
 
 
-@njit(cache=CACHE)
+@njit(cache=CACHE, nogil=True)
 def snap_points(x, y, ang, ex, ey, eang, emag, index, radius, ang_tol, either, pen):
     """For each point (x, y) of direction ``ang``, the edge point of compatible
     direction within ``radius`` pixels with the largest ``emag / (1 + pen
@@ -111,7 +111,7 @@ def snap_points(x, y, ang, ex, ey, eang, emag, index, radius, ang_tol, either, p
     return out
 
 
-@njit(cache=CACHE)
+@njit(cache=CACHE, nogil=True)
 def _solve_pose(px, py, ex, ey, enx, eny, w, m, a, b, fix, along):
     """Weighted least squares for (a, b, tx, ty): point-to-edge distances
     plus ``along`` times point-to-point ones (keeps straight edges
@@ -171,7 +171,7 @@ def _solve_pose(px, py, ex, ey, enx, eny, w, m, a, b, fix, along):
     return out
 
 
-@njit(cache=CACHE)
+@njit(cache=CACHE, nogil=True)
 def _solve4(m, v, out):
     """Solve the 4x4 system ``m x = v`` into ``out`` by Gaussian elimination
     with partial pivoting (Numba's np.linalg would need SciPy). Returns False
@@ -205,7 +205,7 @@ def _solve4(m, v, out):
     return True
 
 
-@njit(cache=CACHE)
+@njit(cache=CACHE, nogil=True)
 def icp(px, py, pang, a, b, tx, ty, ex, ey, eang, enx, eny, index, radii, iterations, ang_tol,
         either, fix_scale, fix_angle, along, score_radius, min_scale):
     """Refine a similarity pose on matched edge points (iteratively re-weighted

@@ -15,7 +15,7 @@ MODE_POINTS = 1
 MODE_SEGMENTS = 2
 
 
-@njit(cache=CACHE, fastmath=True)
+@njit(cache=CACHE, nogil=True, fastmath=True)
 def vote(px, py, pang, pw, p2x, p2y,
          qx, qy, qang, q2x, q2y, qstart, n_abins,
          phis, phi_half, rhos, log_rho0, log_step, mode,
@@ -164,7 +164,7 @@ def vote(px, py, pang, pw, p2x, p2y,
                 proj_sr[k, d] = top
 
 
-@njit(cache=CACHE)
+@njit(cache=CACHE, nogil=True)
 def local_maxima(plane, radius):
     """Row-major (ys, xs) of the positive cells that no cell within
     ``radius`` (a square window, clipped at the border) exceeds: what
