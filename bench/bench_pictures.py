@@ -43,7 +43,6 @@ from _common import command, machine  # noqa: E402  (single-thread setup first)
 
 import cv2  # noqa: E402
 
-import seahough  # noqa: E402
 from seahough import sim as S  # noqa: E402
 from seahough._data import shared_data_dir  # noqa: E402
 

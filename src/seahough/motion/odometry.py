@@ -64,7 +64,7 @@ from .runfiles import (RunFolder, check_kept_row, open_track, run_settings, sett
                        write_output, write_row)
 from .track import (CSV_BASE, CSV_CHECK, CSV_METRIC, CSV_MORE, OdometryResult, Totals,
                     closing_enumerate, plot_track, resolve_metres_per_pixel, summarise,
-                    iter_odometry_csv, metric_position, pose_fields, row_to_csv)
+                    iter_odometry_csv, metric_position, pose_columns, row_to_csv)
 
 __all__ = ["run_odometry", "ODOMETRY_CONFIG", "OdometryTuning"]
 
@@ -584,15 +584,7 @@ def _finish_row(row, st: State, mpp):
         return
     cum = nearest_similarity(cum)
     row["_cum"] = cum
-    row["matrix"] = cum.ravel().tolist()
-    x, y, hd, s = pose_fields(cum, st.shape, st.heading if st.last_pose is not None else 0.0)
-    row.update(x=x, y=y, heading=hd, scale=s)
-    if mpp:
-        row["x_m"], row["y_m"] = metric_position(row, st.shape, mpp)
-    if st.last_pose is not None and st.last_pose == row["index"] - 1:
-        pm = compose(cum, invert_matrix(st.last_pose_cum))
-        c = frame_centre(st.shape)
-        px, py, ps, pa = matrix_to_pose(pm, c)
-        row.update(dx=float(px - c[0]), dy=float(py - c[1]),
-                   rotation=wrap_angle(pa, low=-180.0), scale_change=float(ps),
-                   pair_matrix=pm.ravel().tolist())
+    prev = (st.last_pose_cum if st.last_pose is not None and st.last_pose == row["index"] - 1
+            else None)
+    row.update(pose_columns(cum, st.shape, st.heading if st.last_pose is not None else 0.0, mpp,
+                            prev))

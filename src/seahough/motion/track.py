@@ -16,7 +16,8 @@ import numpy as np
 
 from .._validate import number
 from ..errors import ParameterError
-from ..geometry import angle_difference, apply_matrix, frame_centre, invert_matrix, matrix_to_pose
+from ..geometry import (angle_difference, apply_matrix, compose, frame_centre, invert_matrix,
+                        matrix_to_pose, wrap_angle)
 
 __all__ = ["OdometryResult", "read_odometry_csv", "iter_odometry_csv", "CSV_BASE", "CSV_METRIC",
            "CSV_MORE", "CSV_CHECK"]
@@ -210,6 +211,35 @@ def metric_position(row, shape, mpp):
         return None, None
     c = frame_centre(shape)
     return float((row["x"] - c[0]) * mpp), float((row["y"] - c[1]) * mpp)
+
+
+def pose_columns(cum, shape, heading_prev: float, mpp=None, prev_cum=None) -> dict:
+    """The columns of a row that follow from its cumulative matrix ``cum``
+    (frame-0 pixels -> frame pixels): ``matrix, x, y, heading`` (unwrapped
+    near ``heading_prev``), ``scale``; ``x_m, y_m`` when ``mpp`` (metres per
+    pixel) is given; and, when ``prev_cum`` (the previous frame's) is given,
+    the motion from the previous frame: ``dx, dy, rotation, scale_change,
+    pair_matrix``. (A run computes them as each frame is finished; a survey
+    recomputes them once its chunks are chained.)
+
+    >>> c = pose_columns([[1, 0, -10], [0, 1, 0]], (240, 320), 0.0, mpp=0.01,
+    ...                  prev_cum=[[1, 0, 0], [0, 1, 0]])
+    >>> c["x"], c["y"], c["heading"], c["scale"], round(c["x_m"], 6), c["dx"], c["dy"]
+    (169.5, 119.5, 0.0, 1.0, 0.1, -10.0, 0.0)
+    """
+    cum = np.asarray(cum, float).reshape(2, 3)
+    x, y, hd, s = pose_fields(cum, shape, heading_prev)
+    out = {"matrix": cum.ravel().tolist(), "x": x, "y": y, "heading": hd, "scale": s}
+    if mpp:
+        out["x_m"], out["y_m"] = metric_position(out, shape, mpp)
+    if prev_cum is not None:
+        pm = compose(cum, invert_matrix(np.asarray(prev_cum, float).reshape(2, 3)))
+        c = frame_centre(shape)
+        px, py, ps, pa = matrix_to_pose(pm, c)
+        out.update(dx=float(px - c[0]), dy=float(py - c[1]),
+                   rotation=wrap_angle(pa, low=-180.0), scale_change=float(ps),
+                   pair_matrix=pm.ravel().tolist())
+    return out
 
 
 class Totals:
