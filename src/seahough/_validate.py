@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import os
 
 from .errors import ParameterError
 
@@ -60,3 +61,29 @@ def pair(name: str, value) -> tuple[float, float]:
     if b < a:
         raise ParameterError(f"{name}={value!r}: low must be <= high")
     return a, b
+
+
+def default_workers() -> int:
+    """All the cores this process may use (its CPU affinity mask where the
+    OS has one): the default number of workers of every command and function
+    that takes ``workers``.
+
+    >>> default_workers() >= 1
+    True
+    """
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - macOS, Windows
+        return max(1, os.cpu_count() or 1)
+
+
+def check_workers(workers) -> int:
+    """``workers`` as a positive int (None: :func:`default_workers`); a
+    ParameterError naming it otherwise.
+
+    >>> check_workers(2), check_workers(None) == default_workers()
+    (2, True)
+    """
+    if workers is None:
+        return default_workers()
+    return int(number("workers", workers, lo=1, integer=True))

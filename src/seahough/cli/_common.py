@@ -5,13 +5,12 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import sys
 from pathlib import Path
 
 import click
-import numpy as np
 
+from .._validate import default_workers
 from ..errors import SeahoughError
 
 PROG = "seahough"
@@ -29,6 +28,8 @@ class _Fail(Exception):
 
 # --------------------------------------------------------------------------- output
 def _json_default(o):
+    import numpy as np   # (loaded by then: only results hold numpy values)
+
     if isinstance(o, np.ndarray):
         return o.tolist()
     if isinstance(o, np.generic):
@@ -43,6 +44,7 @@ def _json_default(o):
 def _dumps(obj, **kw) -> str:
     """``obj`` as JSON, numpy values and paths included.
 
+    >>> import numpy as np
     >>> _dumps({"x": np.float32(0.5), "p": Path("a")})
     '{"x": 0.5, "p": "a"}'
     """
@@ -133,19 +135,6 @@ def _table(rows, header, left=False) -> list[str]:
 
 
 # -------------------------------------------------------------------------- workers
-def default_workers() -> int:
-    """All the cores this process may use (its CPU affinity mask where the
-    OS has one): the default of ``--workers``.
-
-    >>> default_workers() >= 1
-    True
-    """
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # pragma: no cover - macOS, Windows
-        return max(1, os.cpu_count() or 1)
-
-
 def workers_option(what: str):
     """The ``--workers N`` option of a command (``what``: what runs at once);
     None (not given) means :func:`default_workers`, and N < 1 is refused
@@ -232,7 +221,7 @@ def parse_pattern(spec: str, polarity: str | None = None, mask: str | None = Non
                 return Pattern.line(v[0], v[1], polarity=pol)
             if kind in ("circle", "ring"):
                 return Pattern.circle(v[0], v[1] if len(v) > 1 else None, polarity=pol)
-            return Pattern.polygon(np.reshape(v, (-1, 2)), polarity=pol)
+            return Pattern.polygon([v[i:i + 2] for i in range(0, len(v), 2)], polarity=pol)
         except SeahoughError as e:
             raise click.BadParameter(f"{spec!r}: {e}", param_hint="PATTERN") from None
     p = Path(spec)

@@ -47,7 +47,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import pair
+from .._validate import check_workers, pair
 from ..config import ODOMETRY_CONFIG, Config, OdometryTuning
 from ..core.accumulator import check_ranges
 from ..errors import ParameterError, SeahoughError, WriteError
@@ -57,7 +57,7 @@ from ..geometry import (angle_difference, apply_matrix, compose, frame_centre, i
 from ..io.frames import FrameReader, list_frames
 from ..io.images import to_gray
 from .mosaic import build_mosaic
-from .prefetch import Prefetch, check_workers, overlapped
+from .prefetch import Prefetch, overlapped
 from .state import Frame, State, advance, ref_cum
 from .pair import content_box, frame_factor, frame_features, search_pair
 from .runfiles import (RunFolder, check_kept_row, open_track, run_settings, settings_hash,

@@ -23,7 +23,6 @@ thread, as before).
 
 from __future__ import annotations
 
-import os
 import threading
 from collections import deque
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -31,39 +30,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import number
 from ..core.features import Features
 from ..errors import ImageError
 from ..io.frames import FrameReader
 from ..io.images import to_gray
 from .pair import check_motion_size
 
-__all__ = ["Prefetch", "Prepared", "default_workers", "check_workers", "overlapped"]
-
-
-def default_workers() -> int:
-    """All the cores this process may use (its CPU affinity mask where the
-    OS has one): the default number of workers.
-
-    >>> default_workers() >= 1
-    True
-    """
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # pragma: no cover - macOS, Windows
-        return max(1, os.cpu_count() or 1)
-
-
-def check_workers(workers) -> int:
-    """``workers`` as a positive int (None: :func:`default_workers`); a
-    ParameterError naming it otherwise.
-
-    >>> check_workers(2), check_workers(None) == default_workers()
-    (2, True)
-    """
-    if workers is None:
-        return default_workers()
-    return int(number("workers", workers, lo=1, integer=True))
+__all__ = ["Prefetch", "Prepared", "overlapped"]
 
 
 @dataclass
