@@ -12,15 +12,11 @@ cluster of processes by default, or on a running cluster (``scheduler=``).
 
 from __future__ import annotations
 
+# Imported here, not on first use: importing a submodule binds its name on
+# the package, so ``seahough.survey.detect`` would be the module after the
+# first ``import seahough.survey.detect``; these bind the functions after it.
+# (``importlib.import_module("seahough.survey.detect")`` gives the module.)
+from .detect import detect
+from .odometry import odometry
+
 __all__ = ["detect", "odometry"]
-
-
-def __getattr__(name):
-    # the two entry points load Dask and the search only when used
-    if name == "detect":
-        from .detect import detect
-        return detect
-    if name == "odometry":
-        from .odometry import odometry
-        return odometry
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

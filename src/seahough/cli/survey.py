@@ -1,0 +1,252 @@
+"""``seahough survey``: many photos on every core or a Dask cluster.
+
+``survey detect`` takes the search options of ``seahough detect`` (the same
+click options, taken from that command) and writes Parquet; ``survey
+odometry`` takes those of ``seahough odometry`` and writes what it writes.
+The work is :mod:`seahough.survey`'s.
+"""
+
+from __future__ import annotations
+
+import csv
+import importlib
+import json
+import time
+from pathlib import Path
+from types import SimpleNamespace
+
+import click
+
+from ..io.frames import printable
+from ._common import _dumps, _Fail, _stderr_is_terminal, make_detector, workers_option
+
+__all__ = ["survey"]
+
+#: The options of ``seahough detect`` that ``survey detect`` takes too.
+SEARCH_OPTIONS = ("scale_range", "angle_range", "max_results", "min_score", "min_confidence",
+                  "downscale", "keypoints", "equalize", "polarity", "mask")
+#: The options of ``seahough odometry`` that ``survey odometry`` takes too.
+ODOMETRY_OPTIONS = ("metres_per_pixel", "altitude", "focal_px", "scale_range", "angle_range",
+                    "no_mosaic")
+#: Error rows listed after a survey (the rest: in images.parquet).
+SHOW_ERRORS = 10
+
+
+def _borrow(command: click.Command, names) -> list[click.Parameter]:
+    """The parameters ``names`` of another command, the same objects."""
+    params = {p.name: p for p in command.params}
+    return [params[n] for n in names]
+
+
+def _cluster_options(f):
+    f = click.option("--scheduler", metavar="ADDRESS", default=None,
+                     help="Use the running Dask scheduler at ADDRESS (tcp://host:8786) "
+                     "instead of a local cluster; its workers must read the files at the "
+                     "same paths.")(f)
+    return workers_option("Worker processes of the local Dask cluster, one thread each; "
+                          "ignored with --scheduler")(f)
+
+
+@click.group(no_args_is_help=True)
+def survey():
+    """Thousands of photos on every core or a Dask cluster, into Parquet.
+
+    \b
+    A local cluster of --workers processes by default, or a running Dask
+    cluster with --scheduler ADDRESS (see docs/scale.md for SLURM/PBS).
+    Needs Dask: pip install 'seahough[survey]'.
+    """
+
+
+def _errors(images_path: Path, limit: int) -> list[tuple[str, str]]:
+    """The first ``limit`` error rows of images.parquet: (path, error)."""
+    import pyarrow.parquet as pq
+
+    t = pq.read_table(images_path, columns=["path", "error"],
+                      filters=[("status", "=", "error")])
+    return list(zip(t.column("path").to_pylist()[:limit], t.column("error").to_pylist()[:limit]))
+
+
+@survey.command("detect", no_args_is_help=True)
+@click.argument("pattern", metavar="PATTERN")
+@click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
+@click.option("--out", "-o", required=True, type=click.Path(file_okay=False),
+              help="Folder for images.parquet, detections.parquet and survey.json.")
+@_cluster_options
+@click.option("--batch-size", type=click.IntRange(min=1), default=None, metavar="N",
+              help="Images per task (default: up to 16).")
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON object.")
+@click.option("--quiet", "-q", is_flag=True,
+              help="No progress bar (shown on stderr only when it is a terminal).")
+def detect(pattern, inputs, out, workers, scheduler, batch_size, as_json, quiet, **search):
+    """Find PATTERN in every image of INPUT... (a survey).
+
+    \b
+    INPUT is an image file, a folder (its images, in name order, or in the
+    order of the timestamps in their names), or @LIST.txt: a file of paths,
+    one a line (a shell cannot pass 100,000 names). PATTERN and the search
+    options are those of `seahough detect`.
+
+    \b
+    Writes to --out:
+      images.parquet      one row per image: index, path, status (found,
+                          not found, error), n_detections, ms, width,
+                          height, note, error
+      detections.parquet  one row per detection: index, path, rank, x, y,
+                          scale, angle, score, confidence, matrix (6
+                          numbers, 2x3 row-major), votes, kind, line_angle,
+                          line_offset, flags
+      survey.json         the settings, the inputs and the counts
+    Results are saved in shards as they come (parts/): run the same
+    command again to continue an interrupted survey (nothing is searched
+    twice; a complete survey is not searched again). Another survey in
+    the same --out (other settings or images) is refused.
+
+    \b
+    Exit status: 0 every image was searched (found or not: see the counts);
+    1 some images could not be read (rows with status "error", the first
+    listed); 2 bad input (parameters, no images, --out, --scheduler).
+
+    \b
+    Example:
+      seahough survey detect marker.png dive/ @more.txt --out found --workers 8
+    """
+    from ..survey.detect import detect as run_survey
+
+    detector = make_detector(pattern, **search)
+    result = run_survey(detector, list(inputs), out, workers=workers, scheduler=scheduler,
+                        batch_size=batch_size, progress=not quiet and _stderr_is_terminal())
+    errors = _errors(result.images, SHOW_ERRORS) if result.errors else []
+    summary = {"images": result.total, "found": result.found, "not_found": result.not_found,
+               "errors": result.errors, "detections": result.n_detections,
+               "searched_now": result.processed, "seconds": round(result.seconds, 3),
+               "files": {"images": str(result.images), "detections": str(result.detections),
+                         "manifest": str(result.manifest)}}
+    status = 1 if result.errors else 0
+    if as_json:
+        summary["first_errors"] = [{"path": p, "error": e} for p, e in errors]
+        click.echo(_dumps(summary))
+        return status
+    click.echo(f"images: {result.total}   found: {result.found}   not found: "
+               f"{result.not_found}   errors: {result.errors}   detections: "
+               f"{result.n_detections}")
+    if result.processed:
+        n = result.processed
+        click.echo(f"searched {n} image{'s' if n != 1 else ''} in {result.seconds:.1f} s, "
+                   f"cluster start included ({1000.0 * result.seconds / n:.1f} ms per image)")
+    else:
+        click.echo("nothing to search: the survey in this folder was complete")
+    for p, e in errors:
+        click.echo(f"  error: {printable(p)}: {printable(e)}")
+    if result.errors > len(errors):
+        click.echo(f"  ... and {result.errors - len(errors)} more (status \"error\" in "
+                   "images.parquet)")
+    click.echo("wrote: " + ", ".join(printable(p) for p in (result.images, result.detections,
+                                                           result.manifest)))
+    return status
+
+
+def _odometry_result(paths: dict):
+    """What ``seahough odometry`` prints its summary from, for the files of
+    a survey's dead reckoning."""
+    summary = {}
+    if paths.get("summary"):
+        try:
+            summary = json.loads(Path(paths["summary"]).read_text())
+        except (OSError, ValueError):
+            summary = {}
+
+    def iter_rows():
+        if not paths.get("csv"):
+            return
+        with open(paths["csv"], newline="") as f:
+            for row in csv.DictReader(f):
+                try:
+                    row["index"] = int(row.get("index", 0))
+                except ValueError:
+                    pass
+                for k in ("x", "y"):
+                    try:
+                        row[k] = float(row[k]) if row.get(k) not in (None, "") else None
+                    except ValueError:
+                        row[k] = None
+                yield row
+
+    return SimpleNamespace(summary=summary, iter_rows=iter_rows, csv_path=paths.get("csv"),
+                           json_path=paths.get("summary"), mosaic_path=paths.get("mosaic"),
+                           trajectory_path=paths.get("trajectory"))
+
+
+@survey.command("odometry", no_args_is_help=True)
+@click.argument("frames", nargs=-1, required=True, metavar="FRAMES...")
+@click.option("--out", "-o", required=True, type=click.Path(file_okay=False),
+              help="Folder for the CSV/JSON track, the mosaic and the trajectory plot.")
+@_cluster_options
+@click.option("--chunk-size", type=click.IntRange(min=2), default=200, show_default=True,
+              metavar="N", help="Frames per chunk measured in parallel (each with its own "
+              "keyframes), chained after.")
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON object.")
+@click.option("--quiet", "-q", is_flag=True,
+              help="No progress bar (shown on stderr only when it is a terminal).")
+def odometry(frames, out, workers, scheduler, chunk_size, as_json, quiet, **opts):
+    """Dead reckoning over a long sequence, pairs measured in parallel.
+
+    \b
+    FRAMES and the options are those of `seahough odometry`; the pairs of
+    frames are measured in chunks on the cluster, the chunks chained after
+    (the one serial step). Writes the same files: odometry.csv, run.json,
+    summary.json, trajectory.png, mosaic.png.
+
+    \b
+    Exit status: 0 every pair was measured; 1 some frames are flagged;
+    2 bad input.
+    """
+    from .odometry import _odometry_rows, _odometry_summary
+
+    mpp, altitude, focal_px = opts["metres_per_pixel"], opts["altitude"], opts["focal_px"]
+    if mpp is not None and (altitude is not None or focal_px is not None):
+        raise click.UsageError("give --metres-per-pixel or --altitude with --focal-px, not both")
+    if (altitude is None) != (focal_px is None):
+        raise click.UsageError("--altitude and --focal-px go together")
+    for f in frames:
+        if not Path(f).exists():
+            raise _Fail(f"{printable(f)}: no such file or folder")
+    # looked up when the command runs (tests stand a stub in for it)
+    run = importlib.import_module("seahough.survey.odometry").odometry
+    t0 = time.perf_counter()
+    paths = run(list(frames), out, workers=workers, scheduler=scheduler, chunk_size=chunk_size,
+                metres_per_pixel=mpp, altitude=altitude, focal_px=focal_px,
+                scale_range=opts["scale_range"], angle_range=opts["angle_range"],
+                mosaic=not opts["no_mosaic"], progress=not quiet and _stderr_is_terminal())
+    result = _odometry_result(paths)
+    unit = "m" if (mpp is not None or altitude is not None) else "px"
+    summ = _odometry_summary(result, time.perf_counter() - t0, unit)
+    status = 1 if summ["flagged_pairs"] else 0
+    if as_json:
+        click.echo(_dumps(summ))
+        return status
+    click.echo(f"frames: {summ['frames']}   flagged pairs: {summ['flagged_pairs']}   "
+               f"distance: {summ['distance']:.2f} {summ['unit']}   "
+               f"time per frame: {summ['time_per_frame_ms']:.0f} ms")
+    flagged = [r for r in _odometry_rows(result) if r.get("flags")][:11]
+    for r in flagged[:10]:
+        click.echo(f"  flagged: frame {r.get('index')} {printable(r.get('file'))}: "
+                   f"{printable(r.get('flags'))}")
+    if len(flagged) > 10:
+        click.echo("  ... and more (see the CSV's flags column)")
+    files = [summ[k] for k in ("csv", "json", "trajectory", "mosaic") if summ[k]]
+    if files:
+        click.echo("wrote: " + ", ".join(printable(f) for f in files))
+    return status
+
+
+def _attach() -> None:
+    """Give the subcommands the options they take from ``detect`` and
+    ``odometry`` (after their own arguments, before their own options)."""
+    detect.params[3:3] = _borrow(importlib.import_module(f"{__package__}.detect").detect,
+                                 SEARCH_OPTIONS)
+    odometry.params[2:2] = _borrow(importlib.import_module(f"{__package__}.odometry").odometry,
+                                   ODOMETRY_OPTIONS)
+
+
+_attach()

@@ -1,0 +1,361 @@
+"""The output folder of ``survey detect``: results in shards, a manifest, and
+the two Parquet files made from them.
+
+Layout of ``OUT``::
+
+    survey.json          the manifest: settings, the inputs' count and hash,
+                         state ("running" or "complete") and counts
+    images.parquet       one row per input image  (written when all are done)
+    detections.parquet   one row per detection    (written when all are done)
+    parts/inputs.parquet the input list (index, path), to name a difference
+    parts/images-NNNNNN.parquet, parts/detections-NNNNNN.parquet
+                         the results, a shard at a time as they come
+
+A shard is written whole or not at all (a temporary file renamed), its
+detections first and its images last: the images shard is the mark that
+the shard is done. The images done are those of the images shards, so a
+rerun searches only the others (none when the survey is complete), and a
+killed run loses at most the results not yet in a shard. One run at a time
+writes a folder (the lock of :class:`~seahough.motion.runfiles.RunFolder`).
+
+>>> import tempfile
+>>> with tempfile.TemporaryDirectory() as d:
+...     with SurveyFolder(d) as f:
+...         f.start({"a": 1}, ["x.png", "y.png"])
+...         f.write_part([image_row(0, "x.png", "error", error="no such file")], [])
+...         sorted(f.done())
+set()
+[0]
+"""
+
+from __future__ import annotations
+
+import datetime
+import hashlib
+import json
+import os
+from pathlib import Path
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from .. import __version__
+from ..errors import ParameterError, WriteError
+from ..io.frames import printable
+from ..motion.runfiles import RunFolder, settings_changes, settings_hash
+
+__all__ = ["SurveyFolder", "IMAGES_SCHEMA", "DETECTIONS_SCHEMA", "image_row", "FORMAT"]
+
+#: Bumped when the files' layout or columns change.
+FORMAT = 1
+MANIFEST = "survey.json"
+IMAGES = "images.parquet"
+DETECTIONS = "detections.parquet"
+PARTS = "parts"
+
+#: images.parquet: one row per input image, in input order.
+IMAGES_SCHEMA = pa.schema([
+    ("index", pa.int64()),          # position in the input list (0-based)
+    ("path", pa.string()),          # as given (folders expanded)
+    ("status", pa.string()),        # "found", "not found" or "error"
+    ("n_detections", pa.int32()),
+    ("ms", pa.float64()),           # reading and searching it, on its worker
+    ("width", pa.int32()),          # null when unreadable
+    ("height", pa.int32()),
+    ("note", pa.string()),          # why the search could not run ("" when it ran)
+    ("error", pa.string()),         # why the image could not be read (null when it could)
+])
+
+#: detections.parquet: one row per detection, best first within an image.
+DETECTIONS_SCHEMA = pa.schema([
+    ("index", pa.int64()),
+    ("path", pa.string()),
+    ("rank", pa.int32()),           # 1 = the image's best
+    ("x", pa.float64()), ("y", pa.float64()), ("scale", pa.float64()),
+    ("angle", pa.float64()), ("score", pa.float64()), ("confidence", pa.float64()),
+    ("matrix", pa.list_(pa.float64(), 6)),   # 2x3 row-major: m00 m01 m02 m10 m11 m12
+    ("votes", pa.float64()),
+    ("kind", pa.string()),          # "object" or "line"
+    ("line_angle", pa.float64()),   # lines only (else null)
+    ("line_offset", pa.float64()),
+    ("flags", pa.list_(pa.string())),
+])
+_IMAGE_COLS = IMAGES_SCHEMA.names
+_DET_COLS = DETECTIONS_SCHEMA.names
+
+
+def image_row(index: int, path: str, status: str, n: int = 0, ms: float = 0.0,
+              width=None, height=None, note: str = "", error=None) -> tuple:
+    """One row of images.parquet, in :data:`IMAGES_SCHEMA` order."""
+    return (index, path, status, n, ms, width, height, note, error)
+
+
+def _text(s):
+    """``s`` as Parquet can store it: a name that is not UTF-8 (bytes the OS
+    gave as surrogates) with those bytes escaped."""
+    if s is None:
+        return None
+    try:
+        s.encode("utf-8")
+        return s
+    except UnicodeEncodeError:
+        return s.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+
+
+def _table(rows: list, schema: pa.Schema) -> pa.Table:
+    cols = list(zip(*rows)) if rows else [()] * len(schema)
+    arrays = []
+    for col, f in zip(cols, schema):
+        if pa.types.is_string(f.type):
+            col = [_text(v) for v in col]
+        elif pa.types.is_list(f.type) and pa.types.is_string(f.type.value_type):
+            col = [[_text(v) for v in vs] for vs in col]
+        arrays.append(pa.array(col, type=f.type))
+    return pa.Table.from_arrays(arrays, schema=schema)
+
+
+def _reason(e: OSError) -> str:
+    text = e.strerror or str(e)
+    return text[:1].lower() + text[1:]
+
+
+def _digest(paths: list[str]) -> str:
+    h = hashlib.blake2b(digest_size=16)
+    for p in paths:
+        h.update(os.fsencode(p) + b"\0")
+    return h.hexdigest()
+
+
+class SurveyFolder:
+    """The output folder of one survey, created and locked.
+
+    Parameters
+    ----------
+    path : path
+        The folder (``--out``).
+
+    Raises
+    ------
+    WriteError
+        The folder cannot be created or written, or another run holds it.
+    """
+
+    def __init__(self, path):
+        self._run = RunFolder(path)         # creates and locks the folder
+        self.path = self._run.path
+        self.manifest = self.path / MANIFEST
+        self.images = self.path / IMAGES
+        self.detections = self.path / DETECTIONS
+        self.parts = self.path / PARTS
+        self._record: dict = {}
+        self._next = 0
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self._run.release()
+        return False
+
+    # ------------------------------------------------------------- manifest
+    def _read_manifest(self) -> dict | None:
+        try:
+            text = self.manifest.read_text()
+        except FileNotFoundError:
+            return None
+        except OSError as e:
+            raise WriteError(f"{self.manifest}: cannot read it ({_reason(e)})") from None
+        try:
+            rec = json.loads(text)
+            assert isinstance(rec, dict) and isinstance(rec["settings"], dict)
+            assert isinstance(rec["inputs"]["count"], int)
+        except (ValueError, KeyError, TypeError, AssertionError):
+            raise ParameterError(f"{self.manifest}: not a survey manifest (damaged?); give "
+                                 "another output folder, or remove this one") from None
+        if rec.get("format") != FORMAT:
+            raise ParameterError(f"{self.manifest}: written by another seahough (format "
+                                 f"{rec.get('format')}, {FORMAT} here); give another output "
+                                 "folder")
+        return rec
+
+    def _write_manifest(self) -> None:
+        tmp = self.path / (MANIFEST + ".tmp")
+        try:
+            with open(tmp, "w") as f:
+                json.dump(self._record, f, indent=2)
+                f.write("\n")
+            os.replace(tmp, self.manifest)
+        except OSError as e:
+            raise WriteError(f"{self.manifest}: cannot write it ({_reason(e)})") from None
+
+    def _old_inputs(self, rec: dict) -> list[str] | None:
+        try:
+            t = pq.read_table(self.parts / "inputs.parquet", columns=["path"])
+        except (OSError, pa.ArrowException):
+            return None
+        cwd = rec.get("cwd") or os.getcwd()
+        return [os.path.abspath(os.path.join(cwd, p)) for p in t.column("path").to_pylist()]
+
+    def _check_inputs(self, rec: dict, paths: list[str], absolute: list[str]) -> None:
+        old = rec["inputs"]
+        if old.get("hash") == _digest(absolute) and old["count"] == len(paths):
+            return
+        what = f"{old['count']} images (now {len(paths)})"
+        before = self._old_inputs(rec)
+        if before is not None:
+            i = next((k for k, (a, b) in enumerate(zip(before, absolute)) if a != b), None)
+            if i is not None:
+                what += (f"; first difference: image {i} {printable(before[i])!r} "
+                         f"(now {printable(absolute[i])!r})")
+            else:
+                what += f"; the first {min(len(before), len(absolute))} are the same"
+        raise ParameterError(f"{self.path}: holds a survey of other images: {what}. Give its "
+                             "images to continue it, or another output folder")
+
+    def start(self, settings: dict, paths: list[str]) -> set:
+        """Begin or continue the survey of ``paths`` with ``settings`` (plain
+        JSON values); returns the indices already done.
+
+        Raises
+        ------
+        ParameterError
+            The folder holds a survey with other settings or other images.
+        WriteError
+            The folder cannot be written.
+        """
+        digest = settings_hash(settings)
+        absolute = [os.path.abspath(p) for p in paths]
+        rec = self._read_manifest()
+        for p in (self.images, self.detections, self.manifest):
+            self._run.check_writable(p)
+        if rec is not None:
+            if rec.get("settings_hash") != digest:
+                changes = settings_changes(rec["settings"], settings)
+                more = f"; and {len(changes) - 4} more" if len(changes) > 4 else ""
+                raise ParameterError(
+                    f"{self.path}: holds a survey made with other settings: "
+                    f"{'; '.join(changes[:4])}{more}. Give its settings to continue it, or "
+                    "another output folder")
+            self._check_inputs(rec, paths, absolute)
+            self._record = rec
+        else:
+            self._record = {
+                "format": FORMAT, "command": "survey detect", "seahough": __version__,
+                "started": datetime.datetime.now(datetime.timezone.utc).isoformat(
+                    timespec="seconds"),
+                "cwd": os.getcwd(), "settings_hash": digest, "settings": settings,
+                "inputs": {"count": len(paths), "hash": _digest(absolute)},
+                "state": "running", "counts": None, "files": {}}
+        self._mkparts()
+        if rec is None:
+            self._clear_parts()                 # a survey whose manifest was removed
+            self._write(self.parts / "inputs.parquet", pa.table(
+                {"index": pa.array(range(len(paths)), pa.int64()),
+                 "path": pa.array([_text(p) for p in paths], pa.string())}))
+            self._write_manifest()
+        self._tidy()
+        return self.done()
+
+    # ---------------------------------------------------------------- parts
+    def _mkparts(self) -> None:
+        try:
+            self.parts.mkdir(exist_ok=True)
+        except OSError as e:
+            raise WriteError(f"{self.parts}: cannot create the folder ({_reason(e)})") from None
+
+    def _part_names(self, kind: str) -> list[Path]:
+        try:
+            return sorted(p for p in self.parts.iterdir()
+                          if p.name.startswith(kind + "-") and p.suffix == ".parquet")
+        except OSError as e:
+            raise WriteError(f"{self.parts}: cannot list it ({_reason(e)})") from None
+
+    def _remove(self, p: Path) -> None:
+        try:
+            p.unlink(missing_ok=True)
+        except OSError as e:
+            raise WriteError(f"{p}: cannot remove it ({_reason(e)})") from None
+
+    def _clear_parts(self) -> None:
+        for p in self.parts.iterdir():
+            if p.is_file():
+                self._remove(p)
+
+    def _tidy(self) -> None:
+        """Remove what a killed run left half-written: temporary files, and
+        detections shards whose images shard (the mark of a done shard) is
+        missing; number the next shard after the last."""
+        for p in self.parts.glob("*.tmp"):
+            self._remove(p)
+        done = {p.name[len("images-"):] for p in self._part_names("images")}
+        for p in self._part_names("detections"):
+            if p.name[len("detections-"):] not in done:
+                self._remove(p)
+        nums = [int(n[:-len(".parquet")]) for n in done if n[:-len(".parquet")].isdigit()]
+        self._next = max(nums, default=-1) + 1
+
+    def done(self) -> set:
+        """The indices of the images whose rows are in a shard."""
+        out: set = set()
+        for p in self._part_names("images"):
+            try:
+                out.update(pq.read_table(p, columns=["index"]).column("index").to_pylist())
+            except (OSError, pa.ArrowException) as e:
+                raise WriteError(f"{p}: cannot read this shard ({e}); remove it to search its "
+                                 "images again") from None
+        return out
+
+    def _write(self, path: Path, table: pa.Table) -> None:
+        tmp = path.with_name(path.name + ".tmp")
+        try:
+            pq.write_table(table, tmp)
+            os.replace(tmp, path)
+        except OSError as e:
+            raise WriteError(f"{path}: cannot write it ({_reason(e)})") from None
+
+    def write_part(self, image_rows: list, detection_rows: list) -> None:
+        """One shard: the rows of some images (``image_row`` tuples) and of
+        their detections (tuples in :data:`DETECTIONS_SCHEMA` order)."""
+        if not image_rows:
+            return
+        name = f"{self._next:06d}.parquet"
+        self._write(self.parts / f"detections-{name}", _table(detection_rows, DETECTIONS_SCHEMA))
+        self._write(self.parts / f"images-{name}", _table(image_rows, IMAGES_SCHEMA))
+        self._next += 1
+
+    # --------------------------------------------------------------- finish
+    def complete(self) -> bool:
+        """Is the survey complete, its two files written?"""
+        return (self._record.get("state") == "complete" and self.images.is_file()
+                and self.detections.is_file())
+
+    def counts(self) -> dict:
+        return dict(self._record.get("counts") or {})
+
+    def finish(self) -> dict:
+        """Write images.parquet and detections.parquet from the shards (all
+        images done), mark the survey complete; returns the counts."""
+        if self.complete():
+            return self.counts()
+        parts = self._part_names("images")
+        images = pq.read_table(parts, schema=IMAGES_SCHEMA) if parts else _table([], IMAGES_SCHEMA)
+        images = images.sort_by("index")
+        n = self._record["inputs"]["count"]
+        if images.num_rows != n:                # (a bug, not a user error)
+            raise RuntimeError(f"{self.parts}: {images.num_rows} image rows for {n} images")
+        dparts = self._part_names("detections")
+        dets = (pq.read_table(dparts, schema=DETECTIONS_SCHEMA) if dparts
+                else _table([], DETECTIONS_SCHEMA))
+        dets = dets.sort_by([("index", "ascending"), ("rank", "ascending")])
+        self._write(self.detections, dets)
+        self._write(self.images, images)
+        status = images.column("status").to_pylist()
+        counts = {"images": n, "found": status.count("found"),
+                  "not_found": status.count("not found"), "errors": status.count("error"),
+                  "detections": dets.num_rows}
+        self._record.update(
+            state="complete", counts=counts,
+            finished=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            files={"images": IMAGES, "detections": DETECTIONS})
+        self._write_manifest()
+        return counts
