@@ -303,7 +303,7 @@ def test_a_killed_worker_loses_nothing(tmp_path, scheduler):
             t = threading.Thread(target=lambda: box.update(r=survey_odometry(paths, out, **kw)),
                                  daemon=True)
             t.start()
-            lock, rows_csv = out / "chunks" / "00000" / ".odometry.lock", \
+            lock, rows_csv = out / "chunks" / "00000" / ".seahough.lock", \
                 out / "chunks" / "00000" / "odometry.csv"
             deadline = time.time() + 60
             while time.time() < deadline:

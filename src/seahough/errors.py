@@ -52,6 +52,22 @@ class WriteError(SeahoughError, OSError):
     """A file or folder cannot be written (unwritable folder, a folder in the way...)."""
 
 
+def without_name(exc: BaseException, name) -> str:
+    """The message of ``exc`` without a leading copy of the file ``name``
+    (for a line that already starts with it).
+
+    >>> without_name(ImageReadError("a.png: not an image"), "a.png")
+    'not an image'
+    """
+    from pathlib import Path
+
+    msg = str(exc)
+    for prefix in (f"{name}: ", f"{Path(name)}: "):
+        if msg.startswith(prefix):
+            return msg[len(prefix):]
+    return msg
+
+
 __all__ = [
     "SeahoughError",
     "ImageError",

@@ -11,7 +11,7 @@ from pathlib import Path
 import click
 
 from .._validate import default_workers
-from ..errors import SeahoughError
+from ..errors import SeahoughError, without_name
 
 PROG = "seahough"
 SHAPES_HELP = ("rect:W,H | line:LENGTH,WIDTH | circle:R | circle:R,INNER (a ring) | "
@@ -57,13 +57,8 @@ def _err(msg: str) -> None:
     click.echo(f"{PROG}: error: {msg}", err=True)
 
 
-def _problem(exc: Exception, name: str) -> str:
-    """The message of ``exc`` without a leading copy of the file name."""
-    msg = str(exc)
-    for prefix in (f"{name}: ", f"{Path(name)}: "):
-        if msg.startswith(prefix):
-            return msg[len(prefix):]
-    return msg
+#: The message of an exception without a leading copy of the file name.
+_problem = without_name
 
 
 def _out_dir(out: str) -> Path:
@@ -187,6 +182,27 @@ _SHAPE_USAGE = {"rect": "rect:W,H (e.g. rect:60,40)", "rectangle": "rect:W,H (e.
                 "ring": "ring:R,INNER (e.g. ring:30,20)",
                 "polygon": "polygon:x1,y1,x2,y2,x3,y3,...",
                 "poly": "polygon:x1,y1,x2,y2,x3,y3,..."}
+
+
+def make_detector(pattern, scale_range, angle_range, max_results, min_score, min_confidence,
+                  downscale, keypoints, equalize, polarity, mask):
+    """The Detector that the search options of ``seahough detect`` (also
+    taken by ``survey detect``) describe; PATTERN as :func:`parse_pattern`."""
+    from ..config import Config
+    from ..core.detector import Detector
+
+    cfg_kw = {}
+    if downscale is not None:
+        cfg_kw["downscale"] = downscale
+    if keypoints is not None:
+        cfg_kw["n_keypoints"] = keypoints
+        cfg_kw["n_keypoints_2d"] = keypoints
+    if equalize:
+        cfg_kw["equalize"] = True
+    pat = parse_pattern(pattern, polarity, mask)
+    return Detector(pat, scale_range, angle_range, config=Config(**cfg_kw),
+                    max_results=max_results, min_score=min_score,
+                    min_confidence=min_confidence)
 
 
 def parse_pattern(spec: str, polarity: str | None = None, mask: str | None = None):

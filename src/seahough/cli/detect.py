@@ -17,7 +17,7 @@ from ..errors import SeahoughError
 from ..geometry import format_angle
 from ..io.frames import printable
 from ._common import (_Output, _dumps, _out_dir, _problem, _progress, _range_callback, _table,
-                      default_workers, parse_pattern, workers_option)
+                      default_workers, make_detector, workers_option)
 
 # the command's defaults are the library's, so that both give the same results
 _DET = {k: v.default for k, v in inspect.signature(Detector.__init__).parameters.items()}
@@ -187,18 +187,9 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     Example:
       seahough detect marker.png dive/*.jpg --scale-range 0.5 2 --json
     """
-    cfg_kw = {}
-    if downscale is not None:
-        cfg_kw["downscale"] = downscale
-    if keypoints is not None:
-        cfg_kw["n_keypoints"] = keypoints
-        cfg_kw["n_keypoints_2d"] = keypoints
-    if equalize:
-        cfg_kw["equalize"] = True
-    cfg = Config(**cfg_kw)
-    pat = parse_pattern(pattern, polarity, mask)
-    detector = Detector(pat, scale_range, angle_range, config=cfg, max_results=max_results,
-                        min_score=min_score, min_confidence=min_confidence)
+    detector = make_detector(pattern, scale_range, angle_range, max_results, min_score,
+                             min_confidence, downscale, keypoints, equalize, polarity, mask)
+    pat = detector.pattern
     out_dir = _out_dir(out) if out is not None else None
     workers = min(workers or default_workers(), len(images))
     bar = _progress(None, len(images), "detect", len(images) > 1 and not quiet)

@@ -11,7 +11,7 @@ a fingerprint of the frame's content (``frame_hash``).
 >>> with tempfile.TemporaryDirectory() as d:
 ...     with RunFolder(d) as run:
 ...         sorted(p.name for p in run.path.iterdir())
-['.odometry.lock']
+['.seahough.lock']
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ __all__ = ["RunFolder", "run_settings", "settings_hash", "settings_changes", "sa
 
 #: Bumped when the rows a run writes change for the same settings.
 SETTINGS_FORMAT = 1
-LOCK_NAME = ".odometry.lock"
+LOCK_NAME = ".seahough.lock"
 OUTPUTS = ("summary.json", "mosaic.png", "trajectory.png")
 
 
@@ -114,7 +114,7 @@ def _reason(e: OSError) -> str:
 
 class RunFolder:
     """The output folder of one run, created and locked (``fcntl.flock`` on
-    ``.odometry.lock``, released when the run ends or its process dies).
+    ``.seahough.lock``, released when the run ends or its process dies).
 
     Parameters
     ----------
