@@ -30,11 +30,11 @@ def test_readme_layout_table_lists_every_module():
 
 def test_core_imports_nothing_of_the_layers_above_it():
     # the recognition core takes arrays and returns dataclasses: it never
-    # imports the pictures, the CLI, the simulator or the dead reckoning
+    # imports the pictures, the CLI, the simulator, the dead reckoning or the surveys
     for path in (PKG / "core").rglob("*.py"):
         text = path.read_text()
-        bad = re.findall(r"^\s*(?:from|import) (?:\.\.(?:viz|cli|sim|motion)\b|matplotlib|click|tqdm)",
-                         text, flags=re.M)
+        bad = re.findall(r"^\s*(?:from|import) (?:\.\.(?:viz|cli|sim|motion|survey)\b"
+                         r"|matplotlib|click|tqdm|dask|distributed|pyarrow)", text, flags=re.M)
         assert not bad, f"{path.relative_to(PKG)} imports {bad}"
 
 
