@@ -263,13 +263,17 @@ def _run(client, detector, paths, todo, folder, batch_size, progress, on_batch) 
     try:
         futures = client.map(search_batch, batches, detector=held, pure=False)
         batch_of = {f.key: b for f, b in zip(futures, batches)}
-        results = as_completed(futures, with_results=True, raise_errors=False)
+        # (results fetched one by one, not with_results=True: its background
+        # gathers can lose one and leave the loop waiting for ever,
+        # dask/distributed#7331; seen here on a 10,000-photo survey)
+        results = as_completed(futures, loop=client.loop)
         del futures, batches
-        for fut, res in results:
+        for fut in results:
             batch = batch_of.pop(fut.key)
             if fut.status == "error":
-                if not isinstance(res[1], KilledWorker):
-                    raise res[1].with_traceback(res[2])
+                exc = fut.exception()
+                if not isinstance(exc, KilledWorker):
+                    raise exc.with_traceback(fut.traceback())
                 if len(batch) > 1:
                     for item in batch:
                         f = client.submit(search_batch, [item], detector=held, pure=False)
@@ -277,6 +281,8 @@ def _run(client, detector, paths, todo, folder, batch_size, progress, on_batch) 
                         results.add(f)
                     continue
                 res = ([image_row(batch[0][0], None, "error", error=DIED)], [])
+            else:
+                res = fut.result()
             rows, dets = res
             pending.add(rows, dets)
             searched += len(rows)

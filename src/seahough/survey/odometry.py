@@ -74,7 +74,8 @@ def _measure_chunks(client, plan, items, out: Path, options: dict, progress: boo
                    dynamic_ncols=True, disable=None, leave=False)
     results = [None] * len(plan)
     try:
-        for fut in as_completed(futures):
+        # (on its client's loop: another client in the process must not matter)
+        for fut in as_completed(futures, loop=client.loop):
             try:
                 res = fut.result()
             except KilledWorker:
