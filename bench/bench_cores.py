@@ -13,7 +13,10 @@ and given their features in the other threads (identical results: see
 
 Data (from ../shared/data): the RoboSub photos (``objects/robosub_transdec``,
 mostly 640x480) searched for ``rect:90,50``, and the real sequences of
-``sequences/`` for the dead reckoning (with its mosaic and plot).
+``sequences/`` for the dead reckoning (with its mosaic and plot); they are
+short (12-22 frames), so a longer one is rendered by the simulator too: 120
+frames of 640x480 over the procedural seabed (``seahough.sim.sequence``,
+seed 3, 24 px a frame), written as PNG to a temporary folder.
 
     python bench/bench_cores.py              # full run (~3-4 min on 2 cores)
     python bench/bench_cores.py --quick      # smoke test (~40 s)
@@ -104,6 +107,21 @@ def main() -> None:
                          lambda w, folder=folder: [exe, "odometry", str(folder), "--out",
                                                    str(Path(tmp) / f"o{w}"), "-q",
                                                    "--workers", str(w)]))
+        if not opts.quick:
+            import cv2
+
+            from seahough import sim
+
+            frames, _ = sim.sequence(n_frames=120, seed=3, source="procedural",
+                                     frame_size=(480, 640), step=24.0)
+            seq = Path(tmp) / "simulated"
+            seq.mkdir()
+            for i, f in enumerate(frames):
+                cv2.imwrite(str(seq / f"f{i:04d}.png"), f)
+            jobs.append(("seahough odometry SIMULATED --out OUT",
+                         "120 simulated 640x480 frames",
+                         lambda w: [exe, "odometry", str(seq), "--out", str(Path(tmp) / f"s{w}"),
+                                    "-q", "--workers", str(w)]))
         for label, what, make in jobs:
             timed(make(1))                                   # warm-up
             base = None

@@ -148,8 +148,7 @@ def main() -> None:
         paths = link_photos(src, max(n1, n2), tmp / "photos")
         # warm-up: Numba's kernels loaded, the photos in the page cache
         bare_loop(detector, paths[:min(len(src), max(n1, n2))])
-        bare = bare_loop(detector, paths[:n1])
-        bare_ms = 1000.0 * bare / n1
+        bare_before = bare_loop(detector, paths[:n1])
         runs = {}
         for w in sorted({1, args.workers}):
             t = time.perf_counter()
@@ -160,6 +159,11 @@ def main() -> None:
                                      client.scheduler.address, args.batch_size)
             assert r.total == n1 and r.processed == n1
             runs[w] = dict(start=start_s, wall=wall, ms=worker_ms(r), found=r.found)
+        # the bare loop again after the survey runs: the two bracket the machine's drift
+        # (on this shared 2-core machine one loop's speed varies by 10-20 % across minutes)
+        bare_after = bare_loop(detector, paths[:n1])
+        bare = 0.5 * (bare_before + bare_after)
+        bare_ms = 1000.0 * bare / n1
         # memory over a long survey
         samples = []
         with open_client(args.workers) as client:
@@ -191,7 +195,9 @@ def main() -> None:
         "scale 0.5-2, any rotation; one thread per process.\n")
     say("| measurement | value |")
     say("|---|---:|")
-    say(f"| bare `Detector.detect` loop, {n1} photos, one process | {bare_ms:.1f} ms/image |")
+    say(f"| bare `Detector.detect` loop, {n1} photos, one process (mean of a loop before and "
+        f"one after the survey runs: {1000 * bare_before / n1:.1f}, {1000 * bare_after / n1:.1f}) "
+        f"| {bare_ms:.1f} ms/image |")
     say(f"| survey, 1 worker, {n1} photos | {1000 * one['wall'] / n1:.1f} ms/image "
         f"({n1 / one['wall']:.1f} images/s) |")
     say(f"| survey, {w} workers, {n1} photos | {1000 * many['wall'] / n1:.1f} ms/image "

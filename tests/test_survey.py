@@ -11,6 +11,7 @@ import json
 import os
 import signal
 import socket
+import subprocess
 import sys
 import time
 import types
@@ -392,3 +393,45 @@ def test_cli_odometry_wiring(tmp_path, capsys, monkeypatch):
     assert "flagged: frame 2 c.png: unreadable" in out
     code, out, err = _cli(capsys, "odometry", frames, "--out", tmp_path / "r", "--altitude", "2")
     assert code == 2 and "--altitude and --focal-px go together" in err
+
+
+@pytest.mark.parametrize("blocked", ["pyarrow", "distributed"])
+@pytest.mark.parametrize("command", ["detect", "odometry"])
+def test_without_the_survey_extra_the_commands_say_what_to_install(tmp_path, blocked, command):
+    # (a real missing package, as on an install without the extra: a None in
+    # sys.modules makes its import fail)
+    args = (["survey", "detect", "rect:9,5", str(tmp_path), "--out", str(tmp_path / "o")]
+            if command == "detect" else ["survey", "odometry", str(tmp_path), "--out",
+                                         str(tmp_path / "o")])
+    code = (f"import sys; sys.modules[{blocked!r}] = None\n"
+            "from seahough.cli import main\n"
+            f"main({args!r})\n")
+    (tmp_path / "a.png").write_bytes(b"")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("seahough: error: "), proc.stderr
+    assert "pip install 'seahough[survey]'" in lines[0]
+
+
+def test_a_cluster_that_goes_away_is_one_error_and_the_rows_are_kept(scenes, cluster, tmp_path):
+    """Cancelled tasks (a restarted scheduler, a lost connection): a SeahoughError
+    naming the folder, the rows received so far in a shard, and a rerun completes."""
+    import distributed
+
+    inputs = [str(scenes / "imgs" / f"s{i % N}.png") for i in range(12)]
+
+    def cancel_rest(done, total):
+        if done == 1:
+            cl = distributed.default_client()
+            cl.cancel([distributed.Future(k, cl) for k in list(cl.futures)])
+
+    out = tmp_path / "out"
+    with pytest.raises(seahough.SeahoughError, match="the cluster went away.*run again"):
+        survey_detect(_pattern(scenes), inputs, out, scheduler=cluster.scheduler_address,
+                      batch_size=1, progress=False, on_batch=cancel_rest)
+    assert list((out / "parts").glob("images-*.parquet")), "the rows received were not kept"
+    r = survey_detect(_pattern(scenes), inputs, out, scheduler=cluster.scheduler_address,
+                      batch_size=1, progress=False)
+    _check_once(r, 12)

@@ -159,6 +159,26 @@ def test_odometry_rows_identical_for_one_and_two_workers(tmp_path):
         run_odometry(frames, tmp_path / "w0", progress=False, workers=0)
 
 
+def test_odometry_frame_smaller_than_the_first_frames_border_with_workers(tmp_path):
+    """A later frame of another size, smaller than the first frame's content
+    box offset: flagged as with one worker (the threads ahead once cropped it
+    to nothing and raised cv2.error)."""
+    rng = np.random.default_rng(0)
+
+    def texture(h, w):
+        noise = (rng.random((h, w)) * 255).astype(np.float32)
+        return cv2.GaussianBlur(noise, (0, 0), 2).astype(np.uint8)
+
+    first = texture(720, 960)
+    first[:70] = 0                                    # a dark band: the content box starts at 72
+    frames = ([np.roll(first, 4 * k, axis=1) for k in range(5)] + [texture(66, 320)]
+              + [np.roll(first, 4 * k, axis=1) for k in range(5, 7)])
+    rows = {w: _rows(run_odometry(frames, tmp_path / f"w{w}", progress=False, mosaic=False,
+                                  workers=w).csv_path) for w in (1, 2)}
+    assert rows[1][5]["status"] == "unreadable" and "differs" in rows[1][5]["flags"]
+    assert rows[1] == rows[2]
+
+
 def test_odometry_cli_workers(tmp_path, capsys):
     frames, _ = sim.sequence(n_frames=5, seed=1, source="procedural")
     d = tmp_path / "frames"

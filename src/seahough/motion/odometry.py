@@ -437,7 +437,7 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
     ahead = Prefetch(reader, n_resumed, max_pixels=cfg.max_pixels,
                      max_memory_mb=cfg.max_memory_mb, workers=workers)
     if searcher is not None:
-        ahead.use(searcher)
+        ahead.use(searcher, st.shape)
     try:
         for i in range(n_resumed, len(items)):
             t0 = time.perf_counter()
@@ -460,7 +460,7 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
                 if st.shape is None:
                     st.shape, st.box = gray.shape, content_box(gray)
                     searcher = _Searcher(st.box, scale_range, angle_range, cfg, tuning)
-                    ahead.use(searcher)
+                    ahead.use(searcher, st.shape)
                 gray = Prefetch.finish(prep, searcher, st.key is not None).gray
                 if st.key is None:
                     row["status"] = "origin"

@@ -102,6 +102,7 @@ class Prefetch:
         self.reader = reader
         self.limits = (max_pixels, max_memory_mb)
         self.searcher = None
+        self.shape = None
         self._next = start                 # the next index to submit
         self._n = len(reader.items)
         self._ahead = 2 * workers
@@ -119,11 +120,14 @@ class Prefetch:
                     self._video_pos[i] = k
                     k += 1
 
-    def use(self, searcher) -> None:
-        """Crop the frames to ``searcher.box`` and compute their features
-        (``searcher.features``) from now on; known once the first readable
-        frame is (frames prepared before are finished in :meth:`finish`)."""
+    def use(self, searcher, shape) -> None:
+        """Crop the frames of ``shape`` (the first readable frame's: the
+        others are flagged by the caller) to ``searcher.box`` and compute
+        their features (``searcher.features``) from now on; known once the
+        first readable frame is (frames prepared before are finished in
+        :meth:`finish`)."""
         self.searcher = searcher
+        self.shape = tuple(shape)
 
     def raw(self, i: int) -> np.ndarray:
         """Frame ``i`` as stored, read in the caller's thread (resume: the
@@ -144,7 +148,7 @@ class Prefetch:
                 finally:
                     self._video_done += 1
                     self._turn.notify_all()
-        if searcher is not None:
+        if searcher is not None and prep.gray is not None and tuple(prep.shape) == self.shape:
             self.finish(prep, searcher, features=True)
         return prep
 

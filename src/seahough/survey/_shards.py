@@ -36,11 +36,15 @@ import json
 import os
 from pathlib import Path
 
-import pyarrow as pa
-import pyarrow.parquet as pq
-
 from .. import __version__
 from ..errors import ParameterError, WriteError
+
+try:
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+except ImportError:   # (a ParameterError: one line from the CLI, as for a missing Dask)
+    raise ParameterError("the survey commands need pyarrow: pip install 'seahough[survey]'") \
+        from None
 from ..io.frames import printable
 from ..motion.runfiles import RunFolder, settings_changes, settings_hash
 

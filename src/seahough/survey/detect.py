@@ -250,8 +250,11 @@ def _run(client, detector, paths, todo, folder, batch_size, progress, on_batch) 
     row, and the survey goes on.
     """
     from distributed import KilledWorker, as_completed
+    from distributed.client import FutureCancelledError
 
-    n_workers = len(client.scheduler_info().get("workers", {}))
+    # (worker threads: every thread takes a batch; scheduler_info() lists at
+    # most 5 workers in some distributed releases, dask/distributed#9045)
+    n_workers = sum(client.nthreads().values())
     size = _batch_size(len(todo), n_workers, batch_size)
     batches = [[(i, os.path.abspath(paths[i])) for i in todo[k:k + size]]
                for k in range(0, len(todo), size)]
@@ -260,6 +263,11 @@ def _run(client, detector, paths, todo, folder, batch_size, progress, on_batch) 
     total, done = len(paths), len(paths) - len(todo)
     bar = _progress_bar(total, done, progress)
     searched = 0
+
+    def lost(why) -> SeahoughError:
+        return SeahoughError(f"{folder.path}: the cluster went away ({why}); the "
+                             f"{done + searched} images done are kept: run again to continue")
+
     try:
         futures = client.map(search_batch, batches, detector=held, pure=False)
         batch_of = {f.key: b for f, b in zip(futures, batches)}
@@ -270,19 +278,27 @@ def _run(client, detector, paths, todo, folder, batch_size, progress, on_batch) 
         del futures, batches
         for fut in results:
             batch = batch_of.pop(fut.key)
-            if fut.status == "error":
-                exc = fut.exception()
-                if not isinstance(exc, KilledWorker):
-                    raise exc.with_traceback(fut.traceback())
-                if len(batch) > 1:
-                    for item in batch:
-                        f = client.submit(search_batch, [item], detector=held, pure=False)
-                        batch_of[f.key] = [item]
-                        results.add(f)
-                    continue
-                res = ([image_row(batch[0][0], None, "error", error=DIED)], [])
-            else:
-                res = fut.result()
+            try:
+                if fut.status == "cancelled":
+                    raise lost("its tasks were cancelled: scheduler restarted or unreachable")
+                if fut.status == "error":
+                    exc = fut.exception()
+                    if not isinstance(exc, KilledWorker):
+                        raise SeahoughError(
+                            f"{batch[0][1]}: the search failed on a worker "
+                            f"({type(exc).__name__}: {exc}); is the same seahough installed "
+                            "there? The images done are kept: run again to continue") from exc
+                    if len(batch) > 1:
+                        for item in batch:
+                            f = client.submit(search_batch, [item], detector=held, pure=False)
+                            batch_of[f.key] = [item]
+                            results.add(f)
+                        continue
+                    res = ([image_row(batch[0][0], None, "error", error=DIED)], [])
+                else:
+                    res = fut.result()
+            except (FutureCancelledError, OSError) as e:   # (CommClosedError is an OSError)
+                raise lost(f"{type(e).__name__}: {e}") from None
             rows, dets = res
             pending.add(rows, dets)
             searched += len(rows)

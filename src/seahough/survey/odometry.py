@@ -61,6 +61,7 @@ def _for_workers(item):
 def _measure_chunks(client, plan, items, out: Path, options: dict, progress: bool) -> list:
     """Every chunk's task on the cluster; their results, in chunk order."""
     from distributed import KilledWorker, as_completed
+    from distributed.client import FutureCancelledError
 
     futures = [client.submit(run_chunk, k, a, [_for_workers(it) for it in items[a:b]],
                              str(chunk_folder(out, k)), options, pure=False)
@@ -76,15 +77,28 @@ def _measure_chunks(client, plan, items, out: Path, options: dict, progress: boo
     try:
         # (on its client's loop: another client in the process must not matter)
         for fut in as_completed(futures, loop=client.loop):
+            k = chunk_of[fut.key]
             try:
                 res = fut.result()
             except KilledWorker:
-                k = chunk_of[fut.key]
                 a, b = plan[k]
                 raise SeahoughError(
                     f"{chunk_folder(out, k)}: chunk {k} (frames {a}-{b - 1}) killed every worker "
                     "that measured it (out of memory?); the chunks finished are kept: run "
                     "again to continue") from None
+            except (FutureCancelledError, OSError) as e:   # (CommClosedError is an OSError)
+                if isinstance(e, SeahoughError):
+                    raise
+                raise SeahoughError(
+                    f"{out}: the cluster went away ({type(e).__name__}: {e}); the chunks "
+                    "finished are kept: run again to continue") from None
+            except SeahoughError:
+                raise
+            except Exception as e:
+                raise SeahoughError(
+                    f"{chunk_folder(out, k)}: chunk {k} failed on a worker ({type(e).__name__}: "
+                    f"{e}); is the same seahough installed there? The chunks finished are "
+                    "kept: run again to continue") from e
             results[res["chunk"]] = res
             if bar is not None:
                 bar.update(res["n"] - (OVERLAP if res["chunk"] else 0))
