@@ -99,6 +99,19 @@ def test_public_names_resolve_on_first_access():
         seahough.Detektor  # noqa: B018
 
 
+def test_modules_reached_as_attributes_as_before_the_lazy_imports(tmp_path):
+    # (scripts wrote seahough.io.frames.list_frames or seahough.core.detector.Detector
+    # after a bare `import seahough`, which then imported them all)
+    code = ("import seahough\n"
+            "for path in ('io.frames', 'io.images', 'core.detector', 'core.kernels', "
+            "'motion.odometry', 'geometry', 'viz'):\n"
+            "    obj = seahough\n"
+            "    for part in path.split('.'):\n"
+            "        obj = getattr(obj, part)\n")
+    _, proc = _imported(code, tmp_path)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+
+
 def test_a_public_name_is_never_a_submodule_name():
     # importing a submodule sets it as an attribute of the package: a public
     # name of the same spelling would be replaced by the module

@@ -435,3 +435,14 @@ def test_a_cluster_that_goes_away_is_one_error_and_the_rows_are_kept(scenes, clu
     r = survey_detect(_pattern(scenes), inputs, out, scheduler=cluster.scheduler_address,
                       batch_size=1, progress=False)
     _check_once(r, 12)
+
+
+def test_a_new_survey_keeps_other_files_in_a_parts_folder(scenes, cluster, tmp_path):
+    out = tmp_path / "out"
+    (out / "parts").mkdir(parents=True)
+    (out / "parts" / "notes.txt").write_text("mine")
+    (out / "parts" / "images-000007.parquet").write_bytes(b"an old survey's shard")
+    r = survey_detect(_pattern(scenes), [str(scenes / "imgs" / "s0.png")], out,
+                      scheduler=cluster.scheduler_address, progress=False)
+    _check_once(r, 1)
+    assert (out / "parts" / "notes.txt").read_text() == "mine"

@@ -172,11 +172,26 @@ def test_a_rerun_redoes_nothing_and_a_half_done_chunk_resumes(tmp_path, schedule
     s = json.loads(rerun["summary"].read_text())["survey"]
     assert (s["kept"], s["measured"], s["resumed"]) == (3, 1, 1)
     assert _csv(rerun["csv"]) == _csv(first["csv"])
-    # other settings: every chunk measured again
-    other = survey_odometry(paths, out, scheduler=scheduler, chunk_size=8, progress=False,
-                            mosaic=False, angle_range=(-10, 10))
-    s = json.loads(other["summary"].read_text())["survey"]
-    assert (s["kept"], s["measured"], s["resumed"]) == (0, 4, 0)
+    # other settings: refused, naming what differs (the folder holds another survey)
+    with pytest.raises(seahough.ParameterError, match=r"other settings: angle_range"):
+        survey_odometry(paths, out, scheduler=scheduler, chunk_size=8, progress=False,
+                        mosaic=False, angle_range=(-10, 10))
+    assert _csv(out / "odometry.csv") == _csv(first["csv"])
+
+
+def test_a_frame_of_another_size_at_a_chunks_start_is_flagged_alone(tmp_path, scheduler):
+    """As a single run does: the chunk starting on it keeps the survey's size as
+    its origin (before: it took the odd frame as origin and flagged the rest)."""
+    paths, _ = _frames(tmp_path / "f", 14, "line", seed=1)
+    small = cv2.imread(paths[5])
+    cv2.imwrite(paths[5], cv2.resize(small, (small.shape[1] * 5 // 8, small.shape[0] * 5 // 8)))
+    single = run_odometry(paths, tmp_path / "one", progress=False, mosaic=False, workers=1)
+    got = survey_odometry(paths, tmp_path / "s", scheduler=scheduler, chunk_size=8,
+                          progress=False, mosaic=False)     # chunk 1 starts at frame 5
+    rows = read_odometry_csv(got["csv"])
+    assert [r["status"] for r in rows] == [r["status"] for r in single.rows]
+    assert rows[5]["status"] == "unreadable" and "differs from the first frame" in rows[5]["flags"]
+    assert rows[5]["flags"] == single.rows[5]["flags"]
 
 
 # ------------------------------------------------------------------- chunk joins

@@ -77,6 +77,7 @@ def read_chunk(folder, result: dict, reader, shape) -> list:
     """
     start = result["start"]
     gone = set(result.get("gone") or ())
+    odd = result.get("odd") or {}
     other = result.get("shape") is not None and shape is not None and \
         tuple(result["shape"]) != tuple(shape)
     rows = []
@@ -91,6 +92,11 @@ def read_chunk(folder, result: dict, reader, shape) -> list:
         r["flags"] = shift_flags(r["flags"], start)
         if local in gone:
             r["flags"] = "unreadable: " + _unreadable_reason(reader, g)
+            r["frame_hash"] = reader.fingerprint(g)
+        elif local in odd and shape is not None:     # (as a run flags a frame of another size)
+            h, w = odd[local]
+            r["flags"] = (f"unreadable: size {w}x{h} differs from the first frame's "
+                          f"{shape[1]}x{shape[0]}")
             r["frame_hash"] = reader.fingerprint(g)
         if other and r["status"] != "unreadable":
             h, w = result["shape"]

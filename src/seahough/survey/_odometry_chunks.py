@@ -169,7 +169,47 @@ def _run(items, folder: Path, options: dict) -> dict:
         return run_odometry(items, folder, resume=False, **kw).summary
 
 
-def run_chunk(k: int, start: int, items: list, folder: str, options: dict) -> dict:
+def first_shape(reader: FrameReader, config) -> tuple | None:
+    """(h, w) of the first readable frame of ``reader``, or None: the size
+    every frame of a run must have."""
+    return next((sh for sh in (_shape_of(reader, i, config) for i in range(len(reader.items)))
+                 if sh is not None), None)
+
+
+def _odd_start(items: list, gone: list, shape, config) -> dict:
+    """The frames at the start of a chunk, before its first readable frame
+    of the survey's ``shape``, that are readable but of another size:
+    ``{position: (h, w)}``. (The chunk's run would take the first of them as
+    its origin and flag every frame of the survey's size.)"""
+    odd: dict = {}
+    if shape is None:
+        return odd
+    reader = FrameReader(items, config.max_pixels, config.max_memory_mb)
+    try:
+        for i in range(len(items)):
+            if i in gone:
+                continue
+            got = _shape_of(reader, i, config)
+            if got == tuple(shape):
+                break
+            if got is not None:
+                odd[i] = got
+    finally:
+        reader.close()
+    return odd
+
+
+def _shape_of(reader: FrameReader, i: int, config):
+    """(h, w) of frame ``i``, or None when it cannot be read."""
+    try:
+        return tuple(to_gray(reader.raw(i), max_pixels=config.max_pixels,
+                             max_memory_mb=config.max_memory_mb).shape)
+    except (ImageError, OSError):
+        return None
+
+
+def run_chunk(k: int, start: int, items: list, folder: str, options: dict,
+              shape=None) -> dict:
     """The task of chunk ``k`` (frames ``start...``), on a worker.
 
     ``options``: ``scale_range, angle_range, config, tuning`` of
@@ -178,12 +218,17 @@ def run_chunk(k: int, start: int, items: list, folder: str, options: dict) -> di
     to chain it: ``chunk``, ``start``, ``folder``, ``state`` ("kept",
     "measured"), ``resumed_rows`` (rows not measured by this task),
     ``shape`` (of its first readable frame, or None) and ``gone`` (frames
-    no longer files, by position in the chunk).
+    no longer files, by position in the chunk), ``odd`` (frames before the
+    chunk's first frame of the survey's ``shape`` that are of another size:
+    set aside, as a run flags them, so that the chunk's origin has the
+    survey's size).
     """
     folder = Path(folder)
+    cfg = options["config"]
     gone = [i for i, it in enumerate(items) if _gone(it)]
     items = [_GONE if i in gone else it for i, it in enumerate(items)]
-    cfg = options["config"]
+    odd = _odd_start(items, gone, shape, cfg)
+    items = [_GONE if i in odd else it for i, it in enumerate(items)]
     digest = chunk_settings_hash(options["scale_range"], options["angle_range"], cfg,
                                  options["tuning"])
     deadline = time.monotonic() + LOCK_WAIT_S
@@ -202,4 +247,4 @@ def run_chunk(k: int, start: int, items: list, folder: str, options: dict) -> di
             time.sleep(0.5)
     return {"chunk": k, "start": start, "folder": str(folder), "state": state,
             "resumed_rows": resumed, "n": len(items), "shape": _origin_shape(folder, items, cfg),
-            "gone": gone}
+            "gone": gone, "odd": odd}

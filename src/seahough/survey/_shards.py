@@ -281,9 +281,12 @@ class SurveyFolder:
             raise WriteError(f"{p}: cannot remove it ({_reason(e)})") from None
 
     def _clear_parts(self) -> None:
-        for p in self.parts.iterdir():
-            if p.is_file():
-                self._remove(p)
+        """Remove a former survey's files (only those a survey writes: a
+        ``parts`` folder of the user's own keeps its other files)."""
+        for pattern in ("images-*.parquet", "detections-*.parquet", "inputs.parquet", "*.tmp"):
+            for p in self.parts.glob(pattern):
+                if p.is_file():
+                    self._remove(p)
 
     def _tidy(self) -> None:
         """Remove what a killed run left half-written: temporary files, and

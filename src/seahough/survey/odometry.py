@@ -33,12 +33,13 @@ from ..core.accumulator import check_ranges
 from ..errors import ParameterError, SeahoughError, WriteError
 from ..io.frames import FrameReader, list_frames
 from ..motion.mosaic import build_mosaic
-from ..motion.runfiles import RunFolder, run_settings, settings_hash, write_output
+from ..motion.runfiles import (RunFolder, run_settings, settings_changes, settings_hash,
+                               write_output)
 from ..motion.track import (CSV_BASE, CSV_CHECK, CSV_METRIC, CSV_MORE, Totals, plot_track,
                             resolve_metres_per_pixel, summarise)
 from ._cluster import open_client
 from ._odometry_chain import Chain, csv_writer, measure_across, read_chunk
-from ._odometry_chunks import OVERLAP, chunk_folder, plan_chunks, run_chunk
+from ._odometry_chunks import OVERLAP, chunk_folder, first_shape, plan_chunks, run_chunk
 
 __all__ = ["odometry"]
 
@@ -58,13 +59,29 @@ def _for_workers(item):
     return os.path.abspath(item) if isinstance(item, str) else item
 
 
-def _measure_chunks(client, plan, items, out: Path, options: dict, progress: bool) -> list:
+def _check_same_survey(run: RunFolder, settings: dict) -> None:
+    """ParameterError when ``run``'s folder holds a survey made with other
+    settings (a new metres per pixel is allowed: chunks are in pixels)."""
+    old = run.read_settings()
+    if old is None:
+        return
+    changes = [c for c in settings_changes(old["settings"], settings)
+               if not c.startswith("metres_per_pixel ")]
+    if changes:
+        more = f"; and {len(changes) - 4} more" if len(changes) > 4 else ""
+        raise ParameterError(f"{run.path}: holds a survey made with other settings: "
+                             f"{'; '.join(changes[:4])}{more}. Use another --out, or remove "
+                             "the folder to start over")
+
+
+def _measure_chunks(client, plan, items, out: Path, options: dict, progress: bool,
+                    shape) -> list:
     """Every chunk's task on the cluster; their results, in chunk order."""
     from distributed import KilledWorker, as_completed
     from distributed.client import FutureCancelledError
 
     futures = [client.submit(run_chunk, k, a, [_for_workers(it) for it in items[a:b]],
-                             str(chunk_folder(out, k)), options, pure=False)
+                             str(chunk_folder(out, k)), options, shape, pure=False)
                for k, (a, b) in enumerate(plan)]
     chunk_of = {f.key: k for k, f in enumerate(futures)}
     bar = None
@@ -208,14 +225,20 @@ def odometry(frames, out, *, workers=None, scheduler=None, chunk_size=200,
     out_abs = Path(os.path.abspath(out))
     with RunFolder(out) as run:
         run.check_writable(run.csv)
+        _check_same_survey(run, settings)      # (before anything of that survey is removed)
         run.clear_outputs()
         try:
             run.csv.unlink(missing_ok=True)       # an earlier survey's: made again below
         except OSError as e:
             raise WriteError(f"{run.csv}: cannot replace it ({e.strerror or e})") from None
         run.write_settings(settings, digest)
+        reader = FrameReader(items, cfg.max_pixels, cfg.max_memory_mb)
+        try:
+            shape = first_shape(reader, cfg)
+        finally:
+            reader.close()
         with open_client(workers, scheduler) as client:
-            results = _measure_chunks(client, plan, items, out_abs, options, progress)
+            results = _measure_chunks(client, plan, items, out_abs, options, progress, shape)
         reader = FrameReader(items, cfg.max_pixels, cfg.max_memory_mb)
         try:
             return _chain_and_write(run, reader, items, results, columns, digest, mpp,
