@@ -110,3 +110,14 @@ def test_auc_rank_formula():
     proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True,
                           text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr[-2000:]
+
+
+def test_survey_chain_benchmark_runs():
+    """bench/bench_survey_chain.py chains synthetic chunks exactly as a survey does."""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), env.get("PYTHONPATH", "")])
+    proc = subprocess.run([sys.executable, str(ROOT / "bench" / "bench_survey_chain.py"), "1200"],
+                          cwd=ROOT, env=env, capture_output=True, text=True, timeout=240)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert re.search(r"chained 1200 frames in 7 chunks of 200: [\d.]+ s wall", proc.stdout), \
+        proc.stdout
