@@ -246,8 +246,9 @@ def _run(client, detector, paths, todo, folder, batch_size, progress, on_batch) 
 
     A batch whose workers died each time Dask ran it (``KilledWorker``:
     an image that exhausts memory or crashes a library) is run again one
-    image a task; an image that still kills its worker gets an ``error``
-    row, and the survey goes on.
+    image a task; an image that still kills its worker is run alone once
+    more (a dying worker also fails the task queued beside it), then gets
+    an ``error`` row, and the survey goes on.
     """
     from distributed import KilledWorker, as_completed
     from distributed.client import FutureCancelledError
@@ -263,6 +264,7 @@ def _run(client, detector, paths, todo, folder, batch_size, progress, on_batch) 
     total, done = len(paths), len(paths) - len(todo)
     bar = _progress_bar(total, done, progress)
     searched = 0
+    retried: set = set()          # images run alone a second time after a dead worker
 
     def lost(why) -> SeahoughError:
         return SeahoughError(f"{folder.path}: the cluster went away ({why}); the "
@@ -288,7 +290,10 @@ def _run(client, detector, paths, todo, folder, batch_size, progress, on_batch) 
                             f"{batch[0][1]}: the search failed on a worker "
                             f"({type(exc).__name__}: {exc}); is the same seahough installed "
                             "there? The images done are kept: run again to continue") from exc
-                    if len(batch) > 1:
+                    # a batch: its images one a task; an image alone: once more (a
+                    # worker dying took the task queued beside it too), then DIED
+                    if len(batch) > 1 or batch[0][0] not in retried:
+                        retried.update(item[0] for item in batch if len(batch) == 1)
                         for item in batch:
                             f = client.submit(search_batch, [item], detector=held, pure=False)
                             batch_of[f.key] = [item]
