@@ -18,7 +18,7 @@ threads, as a user's command does.
 
     python bench/bench_startup.py                  # prints the Markdown table
     python bench/bench_startup.py --write          # and puts it in docs/speed.md ("Start-up")
-    python bench/bench_startup.py --keep /tmp/v    # keep the venv there (e.g. to look at it)
+    python bench/bench_startup.py --keep DIR       # keep the venv in DIR (e.g. to look at it)
 """
 
 from __future__ import annotations

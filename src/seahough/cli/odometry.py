@@ -115,13 +115,7 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
     Example:
       seahough odometry dive/frames --out track --altitude 2.5 --focal-px 800
     """
-    if metres_per_pixel is not None and (altitude is not None or focal_px is not None):
-        raise click.UsageError("give --metres-per-pixel or --altitude with --focal-px, not both")
-    if (altitude is None) != (focal_px is None):
-        raise click.UsageError("--altitude and --focal-px go together")
-    for f in frames:
-        if not Path(f).exists():
-            raise _Fail(f"{printable(f)}: no such file or folder")
+    check_inputs(frames, metres_per_pixel, altitude, focal_px)
     # looked up when the command runs (tests stand a stub in for the module)
     from ..motion.odometry import run_odometry
 
@@ -132,7 +126,26 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
                           angle_range=angle_range, resume=resume,
                           progress=not quiet and _stderr_is_terminal(), mosaic=not no_mosaic,
                           workers=workers)
-    summ = _odometry_summary(result, time.perf_counter() - t0, unit)
+    return report(result, time.perf_counter() - t0, unit, as_json)
+
+
+def check_inputs(frames, metres_per_pixel, altitude, focal_px) -> None:
+    """The checks of ``odometry`` (and ``survey odometry``) before any work:
+    one way to give the ground scale, and frames that exist."""
+    if metres_per_pixel is not None and (altitude is not None or focal_px is not None):
+        raise click.UsageError("give --metres-per-pixel or --altitude with --focal-px, not both")
+    if (altitude is None) != (focal_px is None):
+        raise click.UsageError("--altitude and --focal-px go together")
+    for f in frames:
+        if not Path(f).exists():
+            raise _Fail(f"{printable(f)}: no such file or folder")
+
+
+def report(result, seconds: float, unit: str, as_json: bool) -> int:
+    """Print a run's summary (one JSON object, or lines: the totals, the
+    first 10 flagged frames, the files written); the exit status: 1 when
+    frames are flagged, else 0."""
+    summ = _odometry_summary(result, seconds, unit)
     status = 1 if summ["flagged_pairs"] else 0
     if as_json:
         click.echo(_dumps(summ))

@@ -18,7 +18,7 @@ from types import SimpleNamespace
 import click
 
 from ..io.frames import printable
-from ._common import _dumps, _Fail, _stderr_is_terminal, make_detector, workers_option
+from ._common import _dumps, _stderr_is_terminal, make_detector, workers_option
 
 __all__ = ["survey"]
 
@@ -201,16 +201,10 @@ def odometry(frames, out, workers, scheduler, chunk_size, as_json, quiet, **opts
     Exit status: 0 every pair was measured; 1 some frames are flagged;
     2 bad input.
     """
-    from .odometry import _odometry_rows, _odometry_summary
+    from .odometry import check_inputs, report
 
     mpp, altitude, focal_px = opts["metres_per_pixel"], opts["altitude"], opts["focal_px"]
-    if mpp is not None and (altitude is not None or focal_px is not None):
-        raise click.UsageError("give --metres-per-pixel or --altitude with --focal-px, not both")
-    if (altitude is None) != (focal_px is None):
-        raise click.UsageError("--altitude and --focal-px go together")
-    for f in frames:
-        if not Path(f).exists():
-            raise _Fail(f"{printable(f)}: no such file or folder")
+    check_inputs(frames, mpp, altitude, focal_px)
     # looked up when the command runs (tests stand a stub in for it)
     run = importlib.import_module("seahough.survey.odometry").odometry
     t0 = time.perf_counter()
@@ -218,26 +212,8 @@ def odometry(frames, out, workers, scheduler, chunk_size, as_json, quiet, **opts
                 metres_per_pixel=mpp, altitude=altitude, focal_px=focal_px,
                 scale_range=opts["scale_range"], angle_range=opts["angle_range"],
                 mosaic=not opts["no_mosaic"], progress=not quiet and _stderr_is_terminal())
-    result = _odometry_result(paths)
     unit = "m" if (mpp is not None or altitude is not None) else "px"
-    summ = _odometry_summary(result, time.perf_counter() - t0, unit)
-    status = 1 if summ["flagged_pairs"] else 0
-    if as_json:
-        click.echo(_dumps(summ))
-        return status
-    click.echo(f"frames: {summ['frames']}   flagged pairs: {summ['flagged_pairs']}   "
-               f"distance: {summ['distance']:.2f} {summ['unit']}   "
-               f"time per frame: {summ['time_per_frame_ms']:.0f} ms")
-    flagged = [r for r in _odometry_rows(result) if r.get("flags")][:11]
-    for r in flagged[:10]:
-        click.echo(f"  flagged: frame {r.get('index')} {printable(r.get('file'))}: "
-                   f"{printable(r.get('flags'))}")
-    if len(flagged) > 10:
-        click.echo("  ... and more (see the CSV's flags column)")
-    files = [summ[k] for k in ("csv", "json", "trajectory", "mosaic") if summ[k]]
-    if files:
-        click.echo("wrote: " + ", ".join(printable(f) for f in files))
-    return status
+    return report(_odometry_result(paths), time.perf_counter() - t0, unit, as_json)
 
 
 def _attach() -> None:
