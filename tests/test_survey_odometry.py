@@ -372,7 +372,7 @@ def test_bad_inputs_are_one_line_errors(tmp_path):
         survey_odometry(paths, tmp_path / "o", altitude=2.0)
     with pytest.raises(seahough.ParameterError, match="no such file"):
         survey_odometry([str(tmp_path / "missing.png")], tmp_path / "o")
-    with pytest.raises(seahough.ParameterError, match="^workers must be"):
+    with pytest.raises(seahough.ParameterError, match=r"^workers=0: must be >= 1$"):
         survey_odometry(paths, tmp_path / "o", workers=0)
     blocker = tmp_path / "file"
     blocker.write_text("x")

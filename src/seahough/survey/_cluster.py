@@ -11,7 +11,7 @@ import contextlib
 import signal
 import threading
 
-from .._validate import default_workers
+from .._validate import check_workers
 from ..errors import ParameterError
 
 #: How long to wait for a scheduler given by address to answer.
@@ -43,8 +43,8 @@ def open_client(workers: int | None = None, scheduler: str | None = None):
     ----------
     workers : int, optional
         Worker processes of the local cluster, one thread each (the kernels
-        are single-threaded per call); default :func:`seahough._validate.default_workers`.
-        Ignored with ``scheduler``.
+        are single-threaded per call); default: all cores
+        (:func:`seahough._validate.default_workers`). Ignored with ``scheduler``.
     scheduler : str, optional
         Address of a running scheduler (``tcp://host:8786``, or a
         ``dask-jobqueue`` cluster's ``scheduler_address``); the cluster is
@@ -71,10 +71,7 @@ def open_client(workers: int | None = None, scheduler: str | None = None):
         finally:
             client.close()
         return
-    if workers is None:
-        workers = default_workers()
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise ParameterError(f"workers must be a positive integer, got {workers!r}")
+    workers = check_workers(workers)
     import dask
 
     # processes, one thread each: the work holds the GIL in places (Python glue).

@@ -26,6 +26,7 @@ import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from .._validate import number
 from ..core.detector import Detector
 from ..core.pattern import Pattern
 from ..core.preprocess import choose_factor
@@ -194,9 +195,7 @@ def _batch_size(n: int, workers: int, given) -> int:
     (16, 2, 3)
     """
     if given is not None:
-        if isinstance(given, bool) or not isinstance(given, int) or given < 1:
-            raise ParameterError(f"batch_size must be a positive integer, got {given!r}")
-        return given
+        return int(number("batch_size", given, lo=1, integer=True))
     return max(1, min(MAX_BATCH, math.ceil(n / (8 * max(workers, 1)))))
 
 
