@@ -461,3 +461,114 @@ def hough_rope(scene, width: float, probabilistic: bool = False):
         th, rho, conf = lines[0]
     a, off = line_from_normal(th, rho, shape)
     return a, off, float(conf)
+
+
+# --------------------------------------------------------------------------
+# AKAZE + RANSAC (bench/bench_real_pairs.py)
+# --------------------------------------------------------------------------
+
+def _make_akaze():
+    """``cv2.AKAZE_create()`` (defaults: MLDB binary descriptors, threshold
+    0.001, 4 octaves) with a brute-force Hamming matcher, as in OpenCV's
+    "AKAZE local features matching" tutorial."""
+    return cv2.AKAZE_create(), cv2.BFMatcher(cv2.NORM_HAMMING)
+
+
+_AKAZE: list = []
+
+
+def feature_pair_akaze(prev, cur) -> PeerResult:
+    """AKAZE + ratio test (0.75) + RANSAC similarity, previous -> current frame
+    (the same matching and RANSAC as :func:`feature_pair`)."""
+    if not _AKAZE:
+        _AKAZE.append(_make_akaze())
+    det, matcher = _AKAZE[0]
+    kp1, d1 = det.detectAndCompute(grey(prev), None)
+    kp2, d2 = det.detectAndCompute(grey(cur), None)
+    p1 = np.array([k.pt for k in kp1], np.float32).reshape(-1, 2)
+    p2 = np.array([k.pt for k in kp2], np.float32).reshape(-1, 2)
+    return _ransac(p1, p2, _ratio_matches(matcher, d1, d2))
+
+
+# --------------------------------------------------------------------------
+# KLT + RANSAC (bench/bench_real_pairs.py: the second reference fit where
+# OpenCV has no AKAZE, as OpenCV 5.0, whose main modules dropped it)
+# --------------------------------------------------------------------------
+
+KLT_HIGHPASS = 8.0      # px: sigma of the Gaussian blur subtracted before tracking
+KLT_COARSE_SIDE = 192   # px: longer side of the images of the coarse shift search
+
+
+def _highpass_u8(g: np.ndarray, sigma: float = KLT_HIGHPASS) -> np.ndarray:
+    """``g`` minus its Gaussian blur, stretched to a fixed contrast (uint8):
+    the slow brightness gradients of lights and vignetting, which move with
+    the camera and break Lucas-Kanade's brightness constancy, left out."""
+    g = g.astype(np.float32)
+    d = g - cv2.GaussianBlur(g, (0, 0), sigma)
+    return np.clip(128.0 + d * (40.0 / (float(d.std()) + 1e-6)), 0, 255).astype(np.uint8)
+
+
+def coarse_shift(a: np.ndarray, b: np.ndarray, side: int = KLT_COARSE_SIDE, grid: int = 3):
+    """(shift (dx, dy), score): the translation from grey ``a`` to ``b`` by
+    template matching at low resolution: each of a ``grid`` x ``grid`` tiling
+    of ``a`` (shrunk to ``side`` px) is sought in the whole of ``b``
+    (``cv2.matchTemplate``, TM_CCOEFF_NORMED) and the best-matching tile's
+    shift is kept (a tile can be found however far the frame moved, as long
+    as it stays in view)."""
+    h, w = a.shape
+    f = min(1.0, side / max(h, w))
+    if f < 1.0:
+        a = cv2.resize(a, None, fx=f, fy=f, interpolation=cv2.INTER_AREA)
+        b = cv2.resize(b, None, fx=f, fy=f, interpolation=cv2.INTER_AREA)
+    hh, ww = a.shape
+    ph, pw = hh // grid, ww // grid
+    best, shift = -2.0, np.zeros(2, np.float32)
+    for i in range(grid):
+        for j in range(grid):
+            y0, x0 = i * ph, j * pw
+            tile = a[y0:y0 + ph, x0:x0 + pw]
+            if tile.std() < 1e-3:
+                continue
+            _, v, _, (bx, by) = cv2.minMaxLoc(cv2.matchTemplate(b, tile, cv2.TM_CCOEFF_NORMED))
+            if v > best:
+                best, shift = v, np.array([(bx - x0) / f, (by - y0) / f], np.float32)
+    return shift, float(best)
+
+
+def klt_pair(prev, cur) -> PeerResult:
+    """Corners tracked by pyramidal Lucas-Kanade, then a RANSAC similarity,
+    previous -> current frame.
+
+    Both frames high-passed (:func:`_highpass_u8`); the translation found by
+    :func:`coarse_shift` (on the frames as they are) seeds the tracking;
+    ``cv2.goodFeaturesToTrack`` (2000 corners, quality 0.005, 7 px apart,
+    block 7); ``cv2.calcOpticalFlowPyrLK`` (21x21 window, 3 pyramid levels,
+    30 iterations / 0.01 px) forwards and back, a track kept when both
+    succeed, it ends inside the frame and comes back within 1 px of its
+    start; ``cv2.estimateAffinePartial2D`` as :func:`feature_pair` (RANSAC,
+    3 px). Confidence: the RANSAC inlier count."""
+    ra, rb = grey(prev), grey(cur)
+    a, b = _highpass_u8(ra), _highpass_u8(rb)
+    h, w = a.shape
+    p0 = cv2.goodFeaturesToTrack(a, maxCorners=2000, qualityLevel=0.005, minDistance=7,
+                                 blockSize=7)
+    if p0 is None or len(p0) < 3:
+        return PeerResult(None, 0.0, False)
+    shift, _ = coarse_shift(ra, rb)
+    crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 30, 0.01)
+    lk = {"winSize": (21, 21), "maxLevel": 3, "criteria": crit,
+          "flags": cv2.OPTFLOW_USE_INITIAL_FLOW}
+    p1, st1, _ = cv2.calcOpticalFlowPyrLK(a, b, p0, p0 + shift, **lk)
+    back, st2, _ = cv2.calcOpticalFlowPyrLK(b, a, p1, p1 - shift, **lk)
+    q = p1.reshape(-1, 2)
+    ok = ((st1.ravel() == 1) & (st2.ravel() == 1)
+          & (q[:, 0] >= 0) & (q[:, 1] >= 0) & (q[:, 0] <= w - 1) & (q[:, 1] <= h - 1)
+          & (np.hypot(*(back - p0).reshape(-1, 2).T) < 1.0))
+    if ok.sum() < 3:
+        return PeerResult(None, 0.0, False)
+    M, inl = cv2.estimateAffinePartial2D(p0[ok], p1[ok], method=cv2.RANSAC,
+                                         ransacReprojThreshold=RANSAC_PX)
+    if M is None:
+        return PeerResult(None, 0.0, False)
+    n_in = int(inl.sum()) if inl is not None else 0
+    return PeerResult(M.astype(float), float(n_in), int(ok.sum()) >= MIN_MATCH_COUNT)

@@ -58,6 +58,9 @@ SUCCESS_PX = 3.0
 ROPE_DEG, ROPE_PX = 1.0, 3.0
 DEFAULT_N = {"marker": 25, "fragment": 50, "pair": 50, "rope": 50, "negative": 25}
 QUICK_N = {"marker": 1, "fragment": 2, "pair": 2, "rope": 2, "negative": 1}
+#: The row that shows the recall of the a-contrario decision alone: the
+#: default max_nfa=1, with no score or confidence threshold.
+NFA_ALONE = "seahough (max_nfa=1 alone, min_score 0)"
 SEED = {"marker": 10_000, "fragment": 20_000, "pair": 30_000, "rope": 40_000}
 GHT_TIMEOUT = 4.0          # s per search; a time-out is a failure
 GHT_MAX_TIMEOUTS = 3       # per group (marker and water, or task): then the rest are skipped
@@ -240,7 +243,7 @@ def _ght_locate(ght, scene, group_timeouts: list, rec: Rec):
 
 def task_marker(n, ctx):
     waters = ("moderate", "hard")
-    methods = ("seahough", "GHT (Guil)", "SIFT+RANSAC", "ORB+RANSAC")
+    methods = ("seahough", NFA_ALONE, "GHT (Guil)", "SIFT+RANSAC", "ORB+RANSAC")
     recs = {w: {m: Rec() for m in methods} for w in waters}
     by_marker = {w: {m: {name: Rec() for name in S.MARKERS} for m in methods} for w in waters}
     cache = ctx.setdefault("marker_cache", PeerCache())
@@ -250,6 +253,7 @@ def task_marker(n, ctx):
             img, mask = S.marker(name, 120)
             pattern = seahough.Pattern.from_image(img, mask=mask)
             det = seahough.Detector(pattern, (0.5, 2.0), (0.0, 360.0))
+            alone = seahough.Detector(pattern, (0.5, 2.0), (0.0, 360.0), min_score=0.0)
             sift = peers.FeatureLocator("sift", img, mask)
             orb = peers.FeatureLocator("orb", img, mask)
             ght.set_template(img, mask, (0.55, 1.7), (0.0, 360.0))
@@ -267,6 +271,10 @@ def task_marker(n, ctx):
                     found, ms = timed(det.detect, scene)
                     e = corner_error(found[0].matrix if found else None, truth.matrix, img.shape, sym)
                     for R in (recs[water]["seahough"], by_marker[water]["seahough"][name]):
+                        R.add(e, ms)
+                    found, ms = timed(alone.detect, scene)
+                    e = corner_error(found[0].matrix if found else None, truth.matrix, img.shape, sym)
+                    for R in (recs[water][NFA_ALONE], by_marker[water][NFA_ALONE][name]):
                         R.add(e, ms)
                     for label, loc in (("SIFT+RANSAC", sift), ("ORB+RANSAC", orb)):
                         r, ms = timed(loc.locate, scene)
@@ -444,7 +452,8 @@ FRAG_LOW = f"seahough (min_score {FRAG_LOW_SCORE}, not default)"
 
 
 def task_fragment(n, ctx):
-    methods = ("seahough", FRAG_LOW, "GHT (Guil)", "SIFT+RANSAC", SIFT_LOW, "ORB+RANSAC")
+    methods = ("seahough", NFA_ALONE, FRAG_LOW, "GHT (Guil)", "SIFT+RANSAC", SIFT_LOW,
+               "ORB+RANSAC")
     recs = {m: Rec() for m in methods}
     ght = _ght(ctx["ght_timeout"])
     gto = [0]
@@ -464,6 +473,10 @@ def task_fragment(n, ctx):
             found, ms = timed(det.detect, scene)
             recs["seahough"].add(corner_error(found[0].matrix if found else None, truth.matrix,
                                               patch.shape), ms)
+            alone = seahough.Detector(pattern, (0.7, 1.4), (0.0, 360.0), min_score=0.0)
+            found, ms = timed(alone.detect, scene)
+            recs[NFA_ALONE].add(corner_error(found[0].matrix if found else None, truth.matrix,
+                                             patch.shape), ms)
             low = seahough.Detector(pattern, (0.7, 1.4), (0.0, 360.0), min_score=FRAG_LOW_SCORE)
             found, ms = timed(low.detect, scene)
             recs[FRAG_LOW].add(corner_error(found[0].matrix if found else None, truth.matrix,
@@ -531,7 +544,7 @@ PAIR_SHIFT = 0.25
 
 
 def task_pair(n, ctx):
-    methods = ("seahough", "SIFT+RANSAC", SIFT_LOW, "ORB+RANSAC", "phase correlation",
+    methods = ("seahough", NFA_ALONE, "SIFT+RANSAC", SIFT_LOW, "ORB+RANSAC", "phase correlation",
                "Fourier-Mellin")
     out = {}
     for vi, (variant, spec) in enumerate(PAIR_VARIANTS.items()):
@@ -544,6 +557,9 @@ def task_pair(n, ctx):
                 seahough.estimate_motion(prev, cur, **spec["seahough"])
             m, ms = timed(seahough.estimate_motion, prev, cur, **spec["seahough"])
             recs["seahough"].add(corner_error(m.matrix if m else None, truth.matrix, SHAPE), ms)
+            m, ms = timed(seahough.estimate_motion, prev, cur, min_score=0.0, min_confidence=0.0,
+                          **spec["seahough"])
+            recs[NFA_ALONE].add(corner_error(m.matrix if m else None, truth.matrix, SHAPE), ms)
             for label, fn in (("SIFT+RANSAC", lambda a, b: peers.feature_pair("sift", a, b)),
                               (SIFT_LOW, lambda a, b: peers.feature_pair("sift-lowc", a, b)),
                               ("ORB+RANSAC", lambda a, b: peers.feature_pair("orb", a, b)),
@@ -602,7 +618,7 @@ ROPE_FIXED = "seahough (scale fixed at 1)"
 
 
 def task_rope(n, ctx):
-    methods = ("seahough", ROPE_FIXED, "HoughLines", "HoughLinesP")
+    methods = ("seahough", NFA_ALONE, ROPE_FIXED, "HoughLines", "HoughLinesP")
     recs = {m: Rec() for m in methods}
     answers = {}
     for i in range(n):
@@ -610,8 +626,9 @@ def task_rope(n, ctx):
         width = float(np.random.default_rng(seed).uniform(6.0, 14.0))
         scene, truth = S.rope_scene(SHAPE, width=width, water="moderate", seed=seed)
         line = seahough.Pattern.line(200, width)
-        for label, sr in (("seahough", ROPE_SCALE), (ROPE_FIXED, (1.0, 1.0))):
-            det = seahough.Detector(line, sr, (0.0, 180.0))
+        for label, sr, ms_ in (("seahough", ROPE_SCALE, 0.5), (NFA_ALONE, ROPE_SCALE, 0.0),
+                               (ROPE_FIXED, (1.0, 1.0), 0.5)):
+            det = seahough.Detector(line, sr, (0.0, 180.0), min_score=ms_)
             if i == 0:
                 det.detect(scene)
             found, ms = timed(det.detect, scene)

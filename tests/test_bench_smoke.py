@@ -121,3 +121,65 @@ def test_survey_chain_benchmark_runs():
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert re.search(r"chained 1200 frames in 7 chunks of 200: [\d.]+ s wall", proc.stdout), \
         proc.stdout
+
+
+def test_real_pairs_benchmark_quick(tmp_path):
+    """bench/bench_real_pairs.py --quick: every table, counts that add up."""
+    if shared_data_dir() is None:
+        pytest.skip("real data (../shared/data) is not present beside this checkout")
+    out = tmp_path / "real_pairs.md"
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), env.get("PYTHONPATH", "")])
+    proc = subprocess.run([sys.executable, str(ROOT / "bench" / "bench_real_pairs.py"), "--quick",
+                           "--out", str(out)], cwd=ROOT, env=env, capture_output=True, text=True,
+                          timeout=240)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    text = out.read_text()
+    assert text.strip() == proc.stdout.strip()
+    assert "Machine:" in text and "Command:" in text and "Date:" in text
+    assert "Split: tune part = sparus_auv_seabed, skerki_mud_pair" in text
+    targets = _rows(_section(text, "## Targets"))[1:]
+    assert len(targets) == 5 and all(r[-1] in ("met", "**missed**") for r in targets)
+    methods = _rows(_section(text, "## Methods"))
+    head, body = methods[0], methods[1:]
+    col = {h: i for i, h in enumerate(head)}
+    assert {r[0] for r in body} >= {"seahough", "SIFT+RANSAC", "ORB+RANSAC", "phase correlation"}
+    for r in body:
+        n = int(r[col["pairs with a reference"]])
+        answered = re.match(r"(\d+)/(\d+)", r[col["answered"]])
+        good = re.match(r"(\d+)/(\d+)", r[col["within 1 % (of answers)"]])
+        assert int(answered.group(2)) == n and int(answered.group(1)) <= n, r
+        assert int(good.group(2)) == int(answered.group(1)) and int(good.group(1)) <= int(
+            good.group(2)), r
+        assert int(r[col["off > 3 %"]].split()[0]) <= int(answered.group(1)), r
+    # the sequences' first 2 pairs at half size: 2 + 1 + 2 + 1 + 2 pairs
+    refs = _rows(_section(text, "## Reference motions"))[1:]
+    assert sum(int(r[2]) for r in refs) == 8 and len(refs) == 5
+    odo = _rows(_section(text, "## Dead reckoning"))[1:]
+    assert len(odo) == 5 and all(re.match(r"\d+/\d+", r[3]) for r in odo)
+
+
+def test_real_pairs_reference_rule():
+    """The reference of two fits is their mean where their corners agree within
+    0.5 % of the diagonal, none otherwise; the KLT fit recovers a known motion."""
+    code = (
+        "import numpy as np, bench_real_pairs as B, peers\n"
+        "from seahough import sim\n"
+        "shape = (300, 400)\n"                    # diagonal 500 px: 0.5 % = 2.5 px
+        "a = np.array([[1.0, 0, 10], [0, 1, 5]])\n"
+        "assert abs(B.corner_error(a, a + [[0, 0, 2.4], [0, 0, 0]], shape) - 2.4) < 1e-9\n"
+        "m, why = B.reference(a, a + [[0, 0, 2.4], [0, 0, 0]], shape)\n"
+        "assert why == 'agree' and abs(m[0, 2] - 11.2) < 1e-12\n"
+        "m, why = B.reference(a, a + [[0, 0, 2.6], [0, 0, 0]], shape)\n"
+        "assert m is None and why.startswith('disagree by 2.6 px'), why\n"
+        "assert B.reference(None, a, shape)[0] is None\n"
+        "prev, cur, t = sim.frame_pair(shift=(150.0, -40.0), angle=3.0, scale=1.02, seed=4,\n"
+        "                              source='procedural')\n"
+        "r = peers.klt_pair(prev, cur)\n"
+        "assert B.corner_error(r.matrix, t.motion, prev.shape) < 0.5\n")
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "bench"), str(ROOT / "src"),
+                                         env.get("PYTHONPATH", "")])
+    proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-2000:]

@@ -164,7 +164,7 @@ def test_detect_human_table(scenes):
     lines = proc.stdout.splitlines()
     assert lines[0].startswith(str(d / "scene.png")) and "640x480" in lines[0]
     assert "1 found" in lines[0]
-    assert lines[1].split() == ["#", "x", "y", "scale", "angle", "score", "conf", "flags"]
+    assert lines[1].split() == ["#", "x", "y", "scale", "angle", "score", "conf", "nfa", "flags"]
     row = lines[2].split()
     assert row[0] == "1"
     x, y, scale, angle = map(float, row[1:5])
@@ -285,14 +285,15 @@ def test_angles_near_360_are_printed_wrapped():
     assert format_angle(179.999, 2, 180.0) == "0.00" and format_angle(-0.001) == "0.00"
     assert format_angle(360.0) == "0.00" and format_angle(725.5, 1) == "5.5"
     obj = types.SimpleNamespace(kind="object", x=10.0, y=20.0, scale=1.0, angle=359.998,
-                                score=0.9, confidence=0.8, flags=[])
+                                score=0.9, confidence=0.8, flags=[], nfa=3.21e-05)
     row = _detection_lines([obj])[1].split()
-    assert row[4] == "0.00", row
+    assert row[4] == "0.00" and row[7] == "3.2e-05", row
     line = types.SimpleNamespace(kind="line", x=10.0, y=20.0, scale=1.0, angle=359.998,
                                  line_angle=179.9991, line_offset=-3.0, score=0.9,
-                                 confidence=0.8, flags=["position_along_line_undetermined"])
+                                 confidence=0.8, flags=["position_along_line_undetermined"],
+                                 nfa=float("nan"))
     row = _detection_lines([line])[1].split()
-    assert row[1] == "0.00", row
+    assert row[1] == "0.00" and row[8] == "-", row
 
 
 def test_shape_pattern_and_line(tmp_path):

@@ -213,8 +213,8 @@ def test_outputs_metric_and_mosaic(tmp_path):
         assert Path(p).is_file() and Path(p).stat().st_size > 0
     with open(res.csv_path, newline="") as f:
         header = next(csv.reader(f))
-    assert header[:11] == ["index", "file", "time", "x", "y", "heading", "scale", "confidence",
-                           "flags", "x_m", "y_m"]
+    assert header[:12] == ["index", "file", "time", "x", "y", "heading", "scale", "confidence",
+                           "nfa", "flags", "x_m", "y_m"]
     summary = json.loads(Path(res.json_path).read_text())
     assert summary["frames"] == 10 and summary["measured_pairs"] == 9
     assert summary["flagged_pairs"] == 0
@@ -276,7 +276,7 @@ def test_metres_per_pixel_scales_the_track(tmp_path):
     assert np.hypot(*true_end) > 0.25
     assert np.hypot(*(end - true_end)) < 3.0 * mpp
     with open(res.csv_path, newline="") as f:
-        assert next(csv.reader(f))[9:11] == ["x_m", "y_m"]
+        assert next(csv.reader(f))[10:12] == ["x_m", "y_m"]
 
 
 def test_frame_order_and_timestamps(tmp_path):

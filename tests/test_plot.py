@@ -70,7 +70,9 @@ def test_plot_detections_empty_and_colour(tmp_path):
 
 
 def test_plot_detections_line(tmp_path):
-    rope, truth = sim.rope_scene((240, 320), seed=4, source="procedural")
+    # (seed 1: a rope found at NFA 1e-18; the seed 4 rope, narrower than the
+    # pattern, is found at NFA 5e3 and declined at the default max_nfa)
+    rope, truth = sim.rope_scene((240, 320), seed=1, source="procedural")
     dets = seahough.Detector(seahough.Pattern.line(120, 8), angle_range=(0, 180),
                              max_results=1).detect(rope)
     assert dets and dets[0].kind == "line"

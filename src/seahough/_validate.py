@@ -87,3 +87,14 @@ def check_workers(workers) -> int:
     if workers is None:
         return default_workers()
     return int(number("workers", workers, lo=1, integer=True))
+
+
+def check_max_nfa(value) -> float:
+    """``max_nfa`` as a float > 0 (``math.inf``: no limit); ParameterError if not.
+
+    >>> check_max_nfa(1), check_max_nfa(float("inf"))
+    (1.0, inf)
+    """
+    if isinstance(value, numbers.Real) and not isinstance(value, bool) and value == math.inf:
+        return math.inf
+    return number("max_nfa", value, lo=0.0, lo_open=True)

@@ -158,6 +158,27 @@ def _range_callback(positive: bool):
     return check
 
 
+def _max_nfa_callback(ctx, param, value):
+    """A click callback checking ``--max-nfa``: a number > 0, ``inf`` for no
+    limit (:func:`seahough._validate.check_max_nfa`).
+
+    >>> _max_nfa_callback(None, None, float("inf")), _max_nfa_callback(None, None, 1e-3)
+    (inf, 0.001)
+    >>> _max_nfa_callback(None, None, 0.0)
+    Traceback (most recent call last):
+    click.exceptions.BadParameter: 0: must be > 0 (inf: no limit)
+    """
+    from .._validate import check_max_nfa
+    from ..errors import ParameterError
+
+    if value is None:
+        return value
+    try:
+        return check_max_nfa(value)
+    except ParameterError:
+        raise click.BadParameter(f"{value:g}: must be > 0 (inf: no limit)") from None
+
+
 def _numbers(text: str, spec: str) -> list[float]:
     """The comma-separated numbers of a shape spec.
 
@@ -185,9 +206,14 @@ _SHAPE_USAGE = {"rect": "rect:W,H (e.g. rect:60,40)", "rectangle": "rect:W,H (e.
 
 
 def make_detector(pattern, scale_range, angle_range, max_results, min_score, min_confidence,
-                  downscale, keypoints, equalize, polarity, mask):
+                  downscale, keypoints, equalize, polarity, mask, max_nfa=1.0):
     """The Detector that the search options of ``seahough detect`` (also
-    taken by ``survey detect``) describe; PATTERN as :func:`parse_pattern`."""
+    taken by ``survey detect``) describe; PATTERN as :func:`parse_pattern`.
+
+    >>> make_detector("rect:60,40", (0.5, 2), (0, 360), 5, 0.5, 0.0, None, None, False,
+    ...               None, None, max_nfa=0.01).max_nfa
+    0.01
+    """
     from ..config import Config
     from ..core.detector import Detector
 
@@ -202,7 +228,7 @@ def make_detector(pattern, scale_range, angle_range, max_results, min_score, min
     pat = parse_pattern(pattern, polarity, mask)
     return Detector(pat, scale_range, angle_range, config=Config(**cfg_kw),
                     max_results=max_results, min_score=min_score,
-                    min_confidence=min_confidence)
+                    min_confidence=min_confidence, max_nfa=max_nfa)
 
 
 def parse_pattern(spec: str, polarity: str | None = None, mask: str | None = None):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import inspect
+import math
 import time
 from collections import deque
 from contextlib import closing
@@ -16,26 +17,36 @@ from ..core.detector import FLAG_ALONG_LINE, Detector
 from ..errors import SeahoughError
 from ..geometry import format_angle
 from ..io.frames import printable
-from ._common import (_Output, _dumps, _out_dir, _problem, _progress, _range_callback, _table,
-                      default_workers, make_detector, workers_option)
+from ._common import (_Output, _dumps, _max_nfa_callback, _out_dir, _problem, _progress,
+                      _range_callback, _table, default_workers, make_detector, workers_option)
 
 # the command's defaults are the library's, so that both give the same results
 _DET = {k: v.default for k, v in inspect.signature(Detector.__init__).parameters.items()}
 _CFG = Config()
 
 
+def _nfa_text(nfa) -> str:
+    """A number of false alarms as the table prints it (``-``: not known).
+
+    >>> _nfa_text(3.2e-05), _nfa_text(0.5), _nfa_text(float("nan"))
+    ('3.2e-05', '5.0e-01', '-')
+    """
+    return f"{nfa:.1e}" if math.isfinite(nfa) else "-"
+
+
 def _detection_lines(dets) -> list[str]:
     if dets and dets[0].kind == "line":
-        header = ("#", "line_angle", "offset", "x", "y", "width_scale", "score", "conf", "flags")
+        header = ("#", "line_angle", "offset", "x", "y", "width_scale", "score", "conf", "nfa",
+                  "flags")
         rows = [(i + 1, format_angle(d.line_angle, 2, 180.0), f"{d.line_offset:.2f}",
                  f"{d.x:.2f}", f"{d.y:.2f}", f"{d.scale:.3f}", f"{d.score:.2f}",
-                 f"{d.confidence:.2f}",
+                 f"{d.confidence:.2f}", _nfa_text(d.nfa),
                  ",".join(f for f in d.flags if f != FLAG_ALONG_LINE))
                 for i, d in enumerate(dets)]
     else:
-        header = ("#", "x", "y", "scale", "angle", "score", "conf", "flags")
+        header = ("#", "x", "y", "scale", "angle", "score", "conf", "nfa", "flags")
         rows = [(i + 1, f"{d.x:.2f}", f"{d.y:.2f}", f"{d.scale:.3f}", format_angle(d.angle, 2),
-                 f"{d.score:.2f}", f"{d.confidence:.2f}", ",".join(d.flags))
+                 f"{d.score:.2f}", f"{d.confidence:.2f}", _nfa_text(d.nfa), ",".join(d.flags))
                 for i, d in enumerate(dets)]
     return _table(rows, header)
 
@@ -135,6 +146,10 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int):
 @click.option("--min-confidence", type=click.FloatRange(0.0, 1.0),
               default=_DET["min_confidence"], show_default=True,
               help="Least distinctness of the accumulator peak.")
+@click.option("--max-nfa", type=float, default=_DET["max_nfa"], show_default=True,
+              metavar="FLOAT", callback=_max_nfa_callback,
+              help="Most false alarms: a detection's NFA (how many this good chance would "
+              "give per image) must be at most this; > 0, smaller is stricter, inf: no limit.")
 @click.option("--downscale", type=click.FloatRange(0.0, 1.0, min_open=True), default=None,
               help="Work on the image scaled by this factor (default: automatic).")
 @click.option("--keypoints", type=click.IntRange(min=1), default=None,
@@ -154,7 +169,8 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int):
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar or notes; results only.")
 @workers_option("Images searched at once, in threads; results are printed in the order given")
 def detect(pattern, images, scale_range, angle_range, max_results, min_score, min_confidence,
-           downscale, keypoints, equalize, polarity, mask, as_json, out, quiet, workers):
+           max_nfa, downscale, keypoints, equalize, polarity, mask, as_json, out, quiet,
+           workers):
     """Find PATTERN in each IMAGE.
 
     \b
@@ -170,8 +186,11 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     counter-clockwise as displayed, in [0, 360) (lines: [0, 180)). When the
     search could not run, the line says why, e.g. "not found (no edges)" or
     "not found (pattern larger than the image)"; the JSON "note" field holds
-    the same ("" when the search ran). A progress bar is shown on stderr
-    for several images when stderr is a terminal.
+    the same ("" when the search ran). "nfa" is a detection's number of
+    false alarms: how many detections this good chance alone would give in
+    an image without the object (1e-5: one in 100,000 such images); only
+    those of at most --max-nfa are reported. A progress bar is shown on
+    stderr for several images when stderr is a terminal.
 
     \b
     Images are searched --workers at a time (default: all cores), each
@@ -188,7 +207,8 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
       seahough detect marker.png dive/*.jpg --scale-range 0.5 2 --json
     """
     detector = make_detector(pattern, scale_range, angle_range, max_results, min_score,
-                             min_confidence, downscale, keypoints, equalize, polarity, mask)
+                             min_confidence, downscale, keypoints, equalize, polarity, mask,
+                             max_nfa=max_nfa)
     pat = detector.pattern
     out_dir = _out_dir(out) if out is not None else None
     workers = min(workers or default_workers(), len(images))

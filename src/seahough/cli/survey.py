@@ -24,7 +24,7 @@ __all__ = ["survey"]
 
 #: The options of ``seahough detect`` that ``survey detect`` takes too.
 SEARCH_OPTIONS = ("scale_range", "angle_range", "max_results", "min_score", "min_confidence",
-                  "downscale", "keypoints", "equalize", "polarity", "mask")
+                  "max_nfa", "downscale", "keypoints", "equalize", "polarity", "mask")
 #: The options of ``seahough odometry`` that ``survey odometry`` takes too.
 ODOMETRY_OPTIONS = ("metres_per_pixel", "altitude", "focal_px", "scale_range", "angle_range",
                     "no_mosaic")
@@ -93,8 +93,9 @@ def detect(pattern, inputs, out, workers, scheduler, batch_size, as_json, quiet,
                           not found, error), n_detections, ms, width,
                           height, note, error
       detections.parquet  one row per detection: index, path, rank, x, y,
-                          scale, angle, score, confidence, matrix (6
-                          numbers, 2x3 row-major), votes, kind, line_angle,
+                          scale, angle, score, confidence, nfa (number
+                          of false alarms), matrix (6 numbers, 2x3
+                          row-major), votes, kind, line_angle,
                           line_offset, flags
       survey.json         the settings, the inputs and the counts
     Results are saved in shards as they come (parts/): run the same

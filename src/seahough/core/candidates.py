@@ -23,6 +23,7 @@ from . import kernels as K
 from ..config import Config
 from .accumulator import Bins, Votes
 from .features import Features
+from .nfa import Evidence
 from .pattern import Pattern, PatternFeatures
 from .refine import Fit, Pose, refine
 
@@ -35,6 +36,7 @@ class Candidate:
     votes: float              # height of its accumulator peak
     work_score: float         # score at the working scale
     full: Fit | None = None   # the full-resolution finish (ranking)
+    evidence: Evidence | None = None  # its number of false alarms (ranking)
 
 
 @dataclass(frozen=True)
@@ -190,6 +192,7 @@ class SearchContext:
     max_results: int
     min_score: float
     compare: PoseComparison
+    max_nfa: float = math.inf
 
     @property
     def scale_known(self) -> bool:

@@ -14,7 +14,7 @@ import time
 from dataclasses import dataclass
 
 from ..config import Config
-from .._validate import number
+from .._validate import check_max_nfa, number
 from ..errors import ParameterError
 from ..io.images import to_gray
 from .accumulator import AccumulatorPlanes, accumulate, check_ranges, make_bins, planes
@@ -77,6 +77,10 @@ class Detector:
         A detection must have at least this share of the pattern's edges.
     min_confidence : float
         ... and at least this confidence.
+    max_nfa : float
+        ... and a number of false alarms (:attr:`Detection.nfa`) of at most
+        this: the expected number of chance detections per image that the
+        caller accepts (1.0: one in an image at most, on average).
     search_region : (x0, y0, x1, y1), optional
         Where the pattern origin may lie, in full-resolution image pixels.
         Default: the image, plus a margin of a tenth of the pattern's size.
@@ -95,7 +99,7 @@ class Detector:
 
     def __init__(self, pattern: Pattern, scale_range=(0.5, 2.0), angle_range=(0.0, 360.0), *,
                  config: Config | None = None, max_results: int = 5, min_score: float = 0.5,
-                 min_confidence: float = 0.0, search_region=None):
+                 min_confidence: float = 0.0, max_nfa: float = 1.0, search_region=None):
         if not isinstance(pattern, Pattern):
             raise ParameterError(f"pattern must be a seahough.Pattern, got {type(pattern).__name__}")
         self.pattern = pattern
@@ -106,6 +110,7 @@ class Detector:
         self.max_results = int(number("max_results", max_results, lo=1, integer=True))
         self.min_score = number("min_score", min_score, lo=0.0, hi=1.0)
         self.min_confidence = number("min_confidence", min_confidence, lo=0.0, hi=1.0)
+        self.max_nfa = check_max_nfa(max_nfa)
         if search_region is not None:
             try:
                 sr = tuple(float(v) for v in search_region)
@@ -168,7 +173,8 @@ class Detector:
         ctx = SearchContext(p, pf, features, bins, factor, cfg, self.scale_range,
                             self.angle_range, self.max_results, self.min_score,
                             PoseComparison(p, pf, bins.step, self.scale_range,
-                                           self.angle_range, cfg.search.overlap))
+                                           self.angle_range, cfg.search.overlap),
+                            self.max_nfa)
         cands = find_candidates(ctx, votes)
         t3 = time.perf_counter()
         timings["peaks_refine"] = t3 - t2

@@ -65,6 +65,20 @@ class PatternFeatures:
         """Root-mean-square distance of the voting points from the origin."""
         return float(np.sqrt(np.mean(self.x.astype(float) ** 2 + self.y.astype(float) ** 2)))
 
+    @functools.cached_property
+    def spacing(self) -> float:
+        """Median distance from a scoring point to its nearest neighbour."""
+        x, y = self.vx.astype(float), self.vy.astype(float)
+        if x.size < 2:
+            return 1.0
+        # 16 of them: the points are spread evenly, and this runs for
+        # every frame pattern of a dead reckoning
+        idx = np.arange(0, x.size, max(1, x.size // 16))
+        dx, dy = x[idx, None] - x[None, :], y[idx, None] - y[None, :]
+        d = dx * dx + dy * dy
+        d[np.arange(idx.size), idx] = np.inf
+        return float(np.sqrt(np.median(d.min(axis=1))))
+
 
 def _check_positive(**kw):
     """Sizes of a primitive shape: positive, at least MIN_SHAPE_SIZE and at

@@ -17,6 +17,7 @@ from ..geometry import apply_matrix, pose_to_matrix
 from .candidates import Candidate, SearchContext
 from .features import Features
 from .keypoints import edge_points_near
+from .nfa import CELL, background, evidence, log10_tests
 from .preprocess import compute_gradients
 from .refine import Fit, Pose, refine
 
@@ -71,6 +72,11 @@ class Detection:
         image centre.
     flags : tuple of str
         Warnings about this result (see the ``FLAG_*`` constants).
+    nfa : float
+        Number of false alarms: how many poses this good the search would
+        be expected to find per image by chance, in an image like this one
+        holding no such object (:mod:`seahough.core.nfa`). The smaller, the
+        stronger the evidence; the Detector accepts ``nfa <= max_nfa``.
     """
 
     x: float
@@ -86,6 +92,7 @@ class Detection:
     line_angle: float | None = None
     line_offset: float | None = None
     flags: tuple = ()
+    nfa: float = float("nan")
 
     def to_dict(self) -> dict:
         """Plain-Python form for JSON.
@@ -97,7 +104,8 @@ class Detection:
         d = {"x": self.x, "y": self.y, "scale": self.scale, "angle": self.angle,
              "score": self.score, "confidence": self.confidence,
              "matrix": np.asarray(self.matrix).tolist(), "votes": self.votes,
-             "kind": self.kind, "flags": list(self.flags)}
+             "kind": self.kind, "flags": list(self.flags),
+             "nfa": self.nfa if math.isfinite(self.nfa) else None}
         if self.kind == "line":
             d["line_angle"] = self.line_angle
             d["line_offset"] = self.line_offset
@@ -241,6 +249,9 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
             continue
         if any(cmp.same(c.full.pose, a.full.pose, 1.0) for a in accepted):
             continue
+        judge(ctx, c)  # (only those that could be accepted: it costs a little)
+        if c.evidence.nfa > ctx.max_nfa:
+            continue
         accepted.append(c)
     # runner-up: the best candidate that is not (nearly) the same pose as a detection
     # (for a line: not the same line, found at another point along it)
@@ -258,6 +269,28 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
         dets.append(to_detection(ctx, c, conf, gray.shape))
     dets.sort(key=lambda d: -d.score)
     return dets
+
+
+def judge(ctx: SearchContext, c: Candidate) -> None:
+    """Set a candidate's a-contrario :class:`~.nfa.Evidence` (at its
+    working-scale pose), against a background model of the image around
+    it."""
+    pf, feats, cfg = ctx.pf, ctx.features, ctx.config
+    tol = math.radians(cfg.angle_tolerance)
+    radius = max(1.25, cfg.match_radius * ctx.factor)
+    mx, my = c.fit.pose.map(pf.vx, pf.vy)
+    m = 2 * CELL
+    box = (math.floor(mx.min()) - m, math.floor(my.min()) - m,
+           math.ceil(mx.max()) + m + 1, math.ceil(my.max()) + m + 1)
+    bg = background(feats.edges, radius, tol, box, feats.index)
+    b = ctx.bins
+    area = (b.nx - 1) * (b.ny - 1) * b.step * b.step
+    period = 180.0 if ctx.pattern.is_line else 360.0
+    span = math.hypot((b.nx - 1) * b.step, (b.ny - 1) * b.step) if ctx.pattern.is_line else None
+    width = ctx.pattern.line_width * ctx.factor if ctx.pattern.is_line else 0.0
+    tests = log10_tests(area, pf.radius, ctx.scale_range, ctx.angle_range, period, span, width)
+    c.evidence = evidence(c.fit.pose, pf.vx, pf.vy, pf.vangle, feats.edges, feats.index,
+                          bg, tests, tol=tol, either=ctx.pattern.either, spacing=pf.spacing)
 
 
 def to_detection(ctx: SearchContext, c: Candidate, conf: float, shape) -> Detection:
@@ -282,4 +315,4 @@ def to_detection(ctx: SearchContext, c: Candidate, conf: float, shape) -> Detect
     if ctx.compare.outside_ranges(s, a):
         flags.append(FLAG_OUTSIDE_RANGE)
     return Detection(float(x), float(y), float(s), float(a), float(c.full.score), conf,
-                     m, outline, c.votes, kind, la, lo, tuple(flags))
+                     m, outline, c.votes, kind, la, lo, tuple(flags), c.evidence.nfa)

@@ -82,6 +82,7 @@ class _Measure:
     overlap: float
     ref: int
     method: str
+    nfa: float = float("nan")   # reported (odometry's decisions do not use it)
 
 
 class _Searcher:
@@ -203,7 +204,7 @@ class _Searcher:
                     abs(ang) > t.prior_angle + 2.0:
                 return None, "no_motion"
         return _Measure(shift_origin(m, -ox, -oy), float(d.confidence), float(d.score), ov, ref.index,
-                        method), ""
+                        method, float(d.nfa)), ""
 
 
 def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal_px=None,
@@ -442,7 +443,8 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
         for i in range(n_resumed, len(items)):
             t0 = time.perf_counter()
             row = {"index": i, "file": reader.name(i), "time": reader.time(i), "x": None,
-                   "y": None, "heading": None, "scale": None, "confidence": None, "flags": "",
+                   "y": None, "heading": None, "scale": None, "confidence": None, "nfa": None,
+                   "flags": "",
                    "dx": None, "dy": None, "rotation": None, "scale_change": None,
                    "score": None, "overlap": None, "ref": None, "method": "", "status": "",
                    "matrix": None, "pair_matrix": None, "_cum": None,
@@ -553,6 +555,7 @@ def _measure_frame(row, i, gray, feats, st: State, searcher: _Searcher, load):
     row["ref"] = res.ref
     row["method"] = res.method
     row["confidence"] = res.confidence
+    row["nfa"] = res.nfa
     row["score"] = res.score
     row["overlap"] = res.overlap
 

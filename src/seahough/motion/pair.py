@@ -14,7 +14,7 @@ from ..core.pattern import Pattern
 from ..core.preprocess import choose_factor
 from ..errors import ImageSizeError, ParameterError, PatternError
 from ..geometry import frame_centre, overlap, shift_origin, wrap_angle
-from .._validate import number
+from .._validate import check_max_nfa, number
 from ..io.images import to_gray
 
 #: The smallest side, in pixels, of a frame whose motion is measured. Thinner
@@ -48,6 +48,11 @@ class Motion:
         again.
     overlap : float
         Share of the previous frame that is still in view.
+    nfa : float
+        Number of false alarms of the measurement (:attr:`seahough.Detection.nfa`):
+        how many motions this well supported a search of this pair would
+        find by chance; the smaller, the stronger the evidence (NaN: not
+        known).
     """
 
     matrix: np.ndarray
@@ -58,17 +63,24 @@ class Motion:
     confidence: float
     score: float
     overlap: float
+    nfa: float = float("nan")
 
     def to_dict(self) -> dict:
-        """Plain-Python form for JSON."""
+        """Plain-Python form for JSON (``nfa`` None when not known).
+
+        >>> m = Motion(np.eye(2, 3), 1.0, 0.0, 0.0, 1.0, 0.9, 0.8, 0.95)
+        >>> m.to_dict()["nfa"], Motion(np.eye(2, 3), 0, 0, 0, 1, 1, 1, 1, 1e-12).to_dict()["nfa"]
+        (None, 1e-12)
+        """
         return {"matrix": np.asarray(self.matrix).tolist(), "dx": self.dx, "dy": self.dy,
                 "angle": self.angle, "scale": self.scale, "confidence": self.confidence,
-                "score": self.score, "overlap": self.overlap}
+                "score": self.score, "overlap": self.overlap,
+                "nfa": float(self.nfa) if math.isfinite(self.nfa) else None}
 
 
 def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30.0, 30.0), *,
                     max_shift: float = 0.5, min_confidence: float = 0.15, min_score: float = 0.15,
-                    config: Config | None = None) -> Motion | None:
+                    max_nfa: float = 1.0, config: Config | None = None) -> Motion | None:
     """Motion between two overlapping frames, or None when it cannot tell.
 
     Parameters
@@ -83,6 +95,10 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
         Largest shift, as a share of the frame size.
     min_confidence, min_score : float
         Below these the motion is reported as unknown (None).
+    max_nfa : float
+        ... and above this number of false alarms (:attr:`Motion.nfa`: the
+        motions this well supported that chance would give per pair; 1.0:
+        one at most, on average); ``math.inf``: no limit.
     config : Config, optional
         Search tuning (default :data:`~seahough.config.MOTION_CONFIG`).
 
@@ -106,6 +122,8 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
     >>> m = estimate_motion(prev, cur)
     >>> round(m.angle, 1), round(m.scale, 2), round(truth.angle, 1), round(truth.scale, 2)
     (19.0, 0.91, 19.0, 0.91)
+    >>> bool(m.nfa < 1e-6)              # far beyond chance
+    True
     >>> corners = [[0, 0], [639, 0], [639, 479], [0, 479]]
     >>> from seahough.geometry import apply_matrix
     >>> err = apply_matrix(m.matrix, corners) - apply_matrix(truth.motion, corners)
@@ -116,6 +134,7 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
     if not isinstance(cfg, Config):
         raise ParameterError("config must be a seahough.Config")
     _check_thresholds(max_shift, min_confidence, min_score)
+    max_nfa = check_max_nfa(max_nfa)
     prev = to_gray(previous, name="previous frame", max_pixels=cfg.max_pixels,
                    max_memory_mb=cfg.max_memory_mb)
     cur = to_gray(current, name="current frame", max_pixels=cfg.max_pixels,
@@ -134,7 +153,7 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
         raise PatternError(f"previous frame: {e}") from None
     m = motion_from_pattern(pattern, cur[y0:y1, x0:x1], scale_range, angle_range,
                             max_shift=max_shift, min_confidence=min_confidence,
-                            min_score=min_score, config=cfg)
+                            min_score=min_score, max_nfa=max_nfa, config=cfg)
     if m is None or (x0, y0) == (0, 0):
         return m
     full = shift_origin(m.matrix, -x0, -y0)
@@ -142,7 +161,7 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
     c = frame_centre(prev.shape)
     dx, dy = full[:, :2] @ c + full[:, 2] - c
     return Motion(full, float(dx), float(dy), m.angle, m.scale, m.confidence, m.score,
-                  overlap(full, w, h))
+                  overlap(full, w, h), m.nfa)
 
 
 def check_motion_size(shape, label: str = "frames") -> None:
@@ -179,28 +198,34 @@ def frame_features(gray: np.ndarray, config: Config, scale_range) -> Features:
 
 
 def search_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, region, *,
-                min_score: float, config: Config, features: Features | None = None):
+                min_score: float, config: Config, features: Features | None = None,
+                max_nfa: float = math.inf):
     """The search that measures a pair: the previous frame (``pattern``) in the
     current one (``gray``, a checked grey image as :func:`~seahough.to_gray`
     gives), its centre within ``region`` (x0, y0, x1, y1; current-frame
     pixels). Returns the best :class:`~seahough.Detection` (its confidence not
-    yet judged) or None. :func:`motion_from_pattern` and the dead reckoning
-    both measure pairs with it."""
+    yet judged; its number of false alarms at most ``max_nfa``, by default
+    not judged either) or None. :func:`motion_from_pattern` and the dead
+    reckoning both measure pairs with it."""
     det = Detector(pattern, scale_range, angle_range, config=config, max_results=1,
-                   min_score=min_score, min_confidence=0.0, search_region=region)
+                   min_score=min_score, min_confidence=0.0, max_nfa=max_nfa,
+                   search_region=region)
     res = det.search(gray, features=features)
     return res.detections[0] if res.detections else None
 
 
 def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
                         angle_range=(-30.0, 30.0), *, max_shift=0.5, min_confidence=0.15,
-                        min_score=0.15, config: Config | None = None,
+                        min_score=0.15, max_nfa=1.0, config: Config | None = None,
                         features: Features | None = None) -> Motion | None:
     """:func:`estimate_motion` with the previous frame already made a pattern
     (:meth:`Pattern.from_frame`, origin at its centre); ``features`` may give
-    the current frame's (:func:`frame_features`)."""
+    the current frame's (:func:`frame_features`). Like ``min_confidence``,
+    ``max_nfa`` judges the best motion found: a weaker one is not put in
+    its place."""
     cfg = config or MOTION_CONFIG
     _check_thresholds(max_shift, min_confidence, min_score)
+    max_nfa = check_max_nfa(max_nfa)
     cur = to_gray(current, name="current frame", max_pixels=cfg.max_pixels,
                    max_memory_mb=cfg.max_memory_mb)
     h, w = cur.shape
@@ -212,11 +237,11 @@ def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
     region = (ox - max_shift * w, oy - max_shift * h, ox + max_shift * w, oy + max_shift * h)
     d = search_pair(pattern, cur, scale_range, angle_range, region, min_score=min_score,
                     config=cfg, features=features)
-    if d is None or d.confidence < min_confidence:
+    if d is None or d.confidence < min_confidence or d.nfa > max_nfa:
         return None
     m = d.matrix
     return Motion(m, d.x - ox, d.y - oy, wrap_angle(d.angle, low=-180.0), d.scale,
-                  d.confidence, d.score, overlap(m, w, h))
+                  d.confidence, d.score, overlap(m, w, h), float(d.nfa))
 
 
 def _check_thresholds(max_shift, min_confidence, min_score) -> None:

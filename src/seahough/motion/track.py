@@ -22,7 +22,7 @@ from ..geometry import (angle_difference, apply_matrix, compose, frame_centre, i
 __all__ = ["OdometryResult", "read_odometry_csv", "iter_odometry_csv", "CSV_BASE", "CSV_METRIC",
            "CSV_MORE", "CSV_CHECK"]
 
-CSV_BASE = ["index", "file", "time", "x", "y", "heading", "scale", "confidence", "flags"]
+CSV_BASE = ["index", "file", "time", "x", "y", "heading", "scale", "confidence", "nfa", "flags"]
 CSV_METRIC = ["x_m", "y_m"]
 CSV_MORE = ["dx", "dy", "rotation", "scale_change", "score", "overlap", "ref", "method",
              "status", "ms", "matrix", "pair_matrix"]
@@ -39,10 +39,14 @@ class OdometryResult:
     ----------
     rows : list of dict
         One per frame, the CSV's columns with Python values (None = empty):
-        ``index, file, time, x, y, heading, scale, confidence, flags``
-        (``x_m, y_m`` when metric), and ``dx, dy, rotation, scale_change``
-        (motion from the previous frame: shift of its centre in current-frame
-        pixels, degrees counter-clockwise as displayed, size change),
+        ``index, file, time, x, y, heading, scale, confidence, nfa, flags``
+        (``x_m, y_m`` when metric; ``nfa``: the measurement's number of
+        false alarms, :attr:`seahough.Motion.nfa`, reported only: the run
+        does not judge pairs by it; None for a pair not measured, and in
+        rows of a CSV written before the column existed), and ``dx, dy,
+        rotation, scale_change`` (motion from the previous frame: shift of
+        its centre in current-frame pixels, degrees counter-clockwise as
+        displayed, size change),
         ``score, overlap`` (of the measurement), ``ref`` (index of the frame
         it was measured against), ``method`` (``"prior"``, ``"full"``,
         ``"previous"``: see :func:`run_odometry`'s notes), ``status``
@@ -128,8 +132,10 @@ def row_to_csv(row: dict, columns) -> dict:
     return out
 
 
-_FLOAT_COLS = ("time", "x", "y", "x_m", "y_m", "heading", "scale", "confidence", "dx", "dy",
-               "rotation", "scale_change", "score", "overlap", "ms")
+_FLOAT_COLS = ("time", "x", "y", "x_m", "y_m", "heading", "scale", "confidence", "nfa", "dx",
+               "dy", "rotation", "scale_change", "score", "overlap", "ms")
+#: Columns a CSV of an earlier seahough may lack: read back as None (empty).
+_NEWER_COLS = ("nfa",)
 
 
 def read_odometry_csv(path) -> list:
@@ -167,6 +173,8 @@ def iter_odometry_csv(path):
                 for k in _FLOAT_COLS:
                     if k in rec:
                         row[k] = float(rec[k]) if rec[k] not in ("", None) else None
+                    elif k in _NEWER_COLS:
+                        row[k] = None
                 row["flags"] = rec.get("flags") or ""
                 row["ref"] = int(rec["ref"]) if rec.get("ref") else None
                 row["method"] = rec.get("method") or ""

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import copy
 import csv
+import math
 import re
 import time
 from dataclasses import dataclass
@@ -42,7 +43,7 @@ POSED = ("origin", "measured")
 _SINCE = re.compile(r"(pose_assumed: zero motion since frame )(\d+)")
 _IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 _PAIR = ("dx", "dy", "rotation", "scale_change", "pair_matrix")
-_MEASURE = ("confidence", "score", "overlap")
+_MEASURE = ("confidence", "nfa", "score", "overlap")
 
 
 def shift_flags(flags: str, start: int) -> str:
@@ -180,7 +181,8 @@ class _Cursor:
 def measure_across(reader, p: int, q: int, scale_range, angle_range, config, tuning):
     """Frame ``p``'s motion into frame ``q`` (a full search with the per-frame
     ranges widened over the gap, as run_odometry's), judged by the run's
-    thresholds: ``(Motion, "")`` or ``(None, reason)``."""
+    thresholds (not by its number of false alarms, which run_odometry only
+    reports): ``(Motion, "")`` or ``(None, reason)``."""
     n = q - p
     m = min(n, tuning.max_span)
     (s0, s1), (a0, a1) = scale_range, angle_range
@@ -191,7 +193,7 @@ def measure_across(reader, p: int, q: int, scale_range, angle_range, config, tun
     try:
         mo = estimate_motion(reader.raw(p), reader.raw(q), sr, ar,
                              max_shift=min(1.5, tuning.full_shift * m), min_confidence=0.0,
-                             min_score=tuning.min_score, config=config)
+                             min_score=tuning.min_score, max_nfa=math.inf, config=config)
     except (SeahoughError, OSError):
         return None, "no_motion"
     if mo is None:
@@ -319,8 +321,8 @@ class Chain:
             if mo is not None:
                 row["_G"] = nearest_similarity(compose(mo.matrix, g_p))
                 row.update(status="measured", ref=p, method="previous",
-                           confidence=float(mo.confidence), score=float(mo.score),
-                           overlap=float(mo.overlap))
+                           confidence=float(mo.confidence), nfa=float(mo.nfa),
+                           score=float(mo.score), overlap=float(mo.overlap))
                 self.joins["measured"] += 1
             else:
                 self._assume(row, cursor, why)

@@ -50,8 +50,10 @@ from ..motion.runfiles import RunFolder, settings_changes, settings_hash
 
 __all__ = ["SurveyFolder", "IMAGES_SCHEMA", "DETECTIONS_SCHEMA", "image_row", "FORMAT"]
 
-#: Bumped when the files' layout or columns change.
-FORMAT = 1
+#: Bumped when the files' layout or columns change (2: detections get
+#: ``nfa``, and the settings ``max_nfa``; a survey of format 1 was made
+#: without either and is not continued).
+FORMAT = 2
 MANIFEST = "survey.json"
 IMAGES = "images.parquet"
 DETECTIONS = "detections.parquet"
@@ -77,6 +79,7 @@ DETECTIONS_SCHEMA = pa.schema([
     ("rank", pa.int32()),           # 1 = the image's best
     ("x", pa.float64()), ("y", pa.float64()), ("scale", pa.float64()),
     ("angle", pa.float64()), ("score", pa.float64()), ("confidence", pa.float64()),
+    ("nfa", pa.float64()),          # number of false alarms (Detection.nfa; null: not known)
     ("matrix", pa.list_(pa.float64(), 6)),   # 2x3 row-major: m00 m01 m02 m10 m11 m12
     ("votes", pa.float64()),
     ("kind", pa.string()),          # "object" or "line"

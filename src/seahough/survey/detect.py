@@ -93,8 +93,10 @@ def detector_settings(detector: Detector) -> dict:
     """Everything that changes a survey's rows, as plain JSON values.
 
     >>> s = detector_settings(Detector(Pattern.rectangle(60, 40), (0.8, 1.2)))
-    >>> s["scale_range"], s["pattern"]["kind"], len(s["pattern"]["digest"])
-    ([0.8, 1.2], 'rectangle', 32)
+    >>> s["scale_range"], s["pattern"]["kind"], len(s["pattern"]["digest"]), s["max_nfa"]
+    ([0.8, 1.2], 'rectangle', 32, 1.0)
+    >>> detector_settings(Detector(Pattern.rectangle(60, 40), max_nfa=math.inf))["max_nfa"]
+    'inf'
     """
     p = detector.pattern
     sr = detector.search_region
@@ -105,6 +107,8 @@ def detector_settings(detector: Detector) -> dict:
             "angle_range": [float(v) for v in detector.angle_range],
             "max_results": detector.max_results, "min_score": detector.min_score,
             "min_confidence": detector.min_confidence,
+            # (no limit as "inf": JSON has no infinity)
+            "max_nfa": detector.max_nfa if math.isfinite(detector.max_nfa) else "inf",
             "search_region": None if sr is None else list(sr),
             "config": asdict(detector.config)}
 
@@ -181,8 +185,10 @@ def search_batch(batch: list, detector: Detector) -> tuple[list, list]:
                               int(w), int(h), res.note))
         for rank, d in enumerate(found, 1):
             m = [float(v) for v in d.matrix.ravel()]
+            nfa = float(d.nfa) if math.isfinite(d.nfa) else None
             dets.append((index, None, rank, d.x, d.y, d.scale, d.angle, d.score, d.confidence,
-                         m, float(d.votes), d.kind, d.line_angle, d.line_offset, list(d.flags)))
+                         nfa, m, float(d.votes), d.kind, d.line_angle, d.line_offset,
+                         list(d.flags)))
     return rows, dets
 
 
@@ -322,7 +328,7 @@ def _run(client, detector, paths, todo, folder, batch_size, progress, on_batch) 
 
 def detect(pattern, images, out, *, workers: int | None = None, scheduler: str | None = None,
            scale_range=None, angle_range=None, config=None, max_results=None, min_score=None,
-           min_confidence=None, search_region=None, batch_size: int | None = None,
+           min_confidence=None, max_nfa=None, search_region=None, batch_size: int | None = None,
            progress: bool = True, on_batch=None) -> SurveyResult:
     """Find ``pattern`` in every image of ``images``, on a Dask cluster; the
     results in ``out/images.parquet`` and ``out/detections.parquet``.
@@ -343,7 +349,7 @@ def detect(pattern, images, out, *, workers: int | None = None, scheduler: str |
     scheduler : str, optional
         Address of a running Dask scheduler to use instead (``workers`` is
         then ignored); its workers must read the images at the same paths.
-    scale_range, angle_range, config, max_results, min_score, min_confidence, search_region
+    scale_range, angle_range, config, max_results, min_score, min_confidence, max_nfa, search_region
         The search options of :class:`~seahough.Detector` (its defaults
         when not given).
     batch_size : int, optional
@@ -386,7 +392,7 @@ def detect(pattern, images, out, *, workers: int | None = None, scheduler: str |
     detector = _as_detector(pattern, {
         "scale_range": scale_range, "angle_range": angle_range, "config": config,
         "max_results": max_results, "min_score": min_score, "min_confidence": min_confidence,
-        "search_region": search_region})
+        "max_nfa": max_nfa, "search_region": search_region})
     paths = expand_inputs(images)
     settings = detector_settings(detector)
     if batch_size is not None:

@@ -287,3 +287,145 @@ def icp(px, py, pang, a, b, tx, ty, ex, ey, eang, enx, eny, index, radii, iterat
     score = matched / n if n > 0 else 0.0
     ins = inside / n if n > 0 else 0.0
     return a, b, tx, ty, score, matched, rms, ins
+
+
+@njit(cache=CACHE, nogil=True)
+def chance_coverage(ex, ey, eang, index, ox, oy, h, w, radius, nbins, cell, stride):
+    """The a-contrario background model (:mod:`seahough.core.nfa`): how
+    much of each place a chance match can hit, in the box of ``h`` x ``w``
+    pixels whose top-left pixel is (ox, oy) (coordinates below are relative
+    to it). The edge points are found through ``index`` (pixel -> edge id,
+    -1: none), so that the cost follows the box, not the image.
+
+    Sample positions are the pixel centres whose coordinates are multiples
+    of ``stride``. For each cell of ``cell`` x ``cell`` pixels (a multiple
+    of ``stride``) and each of ``nbins`` direction bins (<= 32), the share
+    of the sample positions of the 3 x 3 cells around it that lie within
+    ``radius`` of an edge point whose direction is in that bin. Returned as
+    a cumulative over the bins: ``(gy, gx, nbins + 1)``, ``[..., 0] = 0``.
+    """
+    gy = (h + cell - 1) // cell
+    gx = (w + cell - 1) // cell
+    sh = (h + stride - 1) // stride
+    sw = (w + stride - 1) // stride
+    per = cell // stride
+    mask = np.zeros((sh, sw), np.uint32)
+    hits = np.zeros((gy, gx, nbins), np.float64)
+    r2 = radius * radius
+    scale = nbins / TWO_PI
+    inv = 1.0 / stride
+    ih, iw = index.shape
+    m = int(math.ceil(radius)) + 1
+    for py in range(max(oy - m, 0), min(oy + h + m, ih)):
+        for px in range(max(ox - m, 0), min(ox + w + m, iw)):
+            j = index[py, px]
+            if j < 0:
+                continue
+            b = int(eang[j] * scale)
+            if b >= nbins:
+                b = nbins - 1
+            x = ex[j] - ox
+            y = ey[j] - oy
+            bit = np.uint32(1) << np.uint32(b)
+            # the sample rows and columns within the radius
+            y0 = max(int(math.ceil((y - radius) * inv)), 0)
+            y1 = min(int(math.floor((y + radius) * inv)), sh - 1)
+            x0 = max(int(math.ceil((x - radius) * inv)), 0)
+            x1 = min(int(math.floor((x + radius) * inv)), sw - 1)
+            for sy in range(y0, y1 + 1):
+                dy = sy * stride - y
+                for sx in range(x0, x1 + 1):
+                    dx = sx * stride - x
+                    if dx * dx + dy * dy <= r2:
+                        mm = mask[sy, sx]
+                        if not (mm & bit):
+                            mask[sy, sx] = mm | bit
+                            hits[sy // per, sx // per, b] += 1.0
+    # sample positions per cell (the last row and column may be cut)
+    ny = np.empty(gy)
+    for i in range(gy):
+        ny[i] = min(per, sh - i * per)
+    nx = np.empty(gx)
+    for i in range(gx):
+        nx[i] = min(per, sw - i * per)
+    out = np.zeros((gy, gx, nbins + 1), np.float64)
+    for cy in range(gy):
+        for cx in range(gx):
+            area = 0.0
+            for yy in range(max(cy - 1, 0), min(cy + 2, gy)):
+                for xx in range(max(cx - 1, 0), min(cx + 2, gx)):
+                    area += ny[yy] * nx[xx]
+                    for b in range(nbins):
+                        out[cy, cx, b + 1] += hits[yy, xx, b]
+            for b in range(nbins):
+                out[cy, cx, b + 1] = out[cy, cx, b] + out[cy, cx, b + 1] / area
+    return out
+
+
+@njit(cache=CACHE, nogil=True, inline="always")
+def _coverage_at(cum, cy, cx, phi, nb):
+    """Cumulative coverage of cell (cx, cy) from direction 0 to ``phi`` (any real)."""
+    u = phi * nb / TWO_PI
+    turns = math.floor(u / nb)
+    u -= turns * nb
+    j = min(int(u), nb - 1)
+    frac = u - j
+    return turns * cum[cy, cx, nb] + cum[cy, cx, j] + frac * (cum[cy, cx, j + 1] - cum[cy, cx, j])
+
+
+@njit(cache=CACHE, nogil=True)
+def evidence_counts(px, py, pang, a, b, tx, ty, ids, cum, ox, oy, cell, h, w, border, tol,
+                    either, step, ell):
+    """The a-contrario counts of a pose (:func:`seahough.core.nfa.evidence`):
+    ``(n, m, k, p)``. Pattern points farther than ``border`` from the edges
+    of an ``h`` x ``w`` image count; ``n`` sums, for each, the image edge
+    points its stretch of edge covers (``step``: the distance between
+    neighbouring points, px; a thinned edge has ``max(|cos|, |sin|)`` points
+    a pixel of its length), ``m`` the independent observations it makes
+    (one per ``ell`` edge points at most), ``k`` the distinct edge points
+    matched (``ids``, -1: none), ``p`` the mean chance of a match at the
+    points (``cum``: the background model, its cell (0, 0) at pixel (ox, oy))."""
+    gy, gx, nb1 = cum.shape
+    nb = nb1 - 1
+    phi = math.atan2(b, a)
+    width = 2.0 * tol * nb / TWO_PI
+    inv_w = 1.0 / max(width, 1e-9)
+    scale_w = min(width, 1.0)
+    n_eff = 0.0
+    m_eff = 0.0
+    psum = 0.0
+    cnt = 0
+    buf = np.empty(px.shape[0], np.int64)
+    m = 0
+    for i in range(px.shape[0]):
+        x = tx + a * px[i] + b * py[i]
+        y = ty - b * px[i] + a * py[i]
+        if x < border or y < border or x > w - 1 - border or y > h - 1 - border:
+            continue
+        want = pang[i] - phi
+        want -= TWO_PI * math.floor(want / TWO_PI)
+        cover = step * max(abs(math.cos(want)), abs(math.sin(want)))
+        n_eff += min(1.0, cover)
+        m_eff += min(1.0, cover / ell)
+        cx = min(max(int(math.floor((x - ox) / cell)), 0), gx - 1)
+        cy = min(max(int(math.floor((y - oy) / cell)), 0), gy - 1)
+        p = (_coverage_at(cum, cy, cx, want + tol, nb) - _coverage_at(cum, cy, cx, want - tol, nb))
+        p = min(max(p * inv_w, 0.0), 1.0) * scale_w
+        if either:
+            q = (_coverage_at(cum, cy, cx, want + math.pi + tol, nb)
+                 - _coverage_at(cum, cy, cx, want + math.pi - tol, nb))
+            q = min(max(q * inv_w, 0.0), 1.0) * scale_w
+            p = 1.0 - (1.0 - p) * (1.0 - q)
+        psum += p
+        cnt += 1
+        if ids[i] >= 0:
+            buf[m] = ids[i]
+            m += 1
+    k = 0
+    if m > 0:
+        s = np.sort(buf[:m])
+        k = 1
+        for i in range(1, m):
+            if s[i] != s[i - 1]:
+                k += 1
+    return n_eff, m_eff, k, psum / cnt if cnt > 0 else 0.0

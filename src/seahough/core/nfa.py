@@ -1,0 +1,259 @@
+"""Stage 6b: the a-contrario decision, the number of false alarms (NFA).
+
+A candidate pose puts ``n`` pattern points on the image, and ``k`` of them
+find an image edge point of compatible direction within the match radius.
+How surprising is that? In an image holding no object (the *background
+model*), a point placed at random finds such an edge point with a
+probability ``p`` that depends on where it lies: bare sand offers few
+edges, textured seabed many. The chance that at least ``k`` of ``n`` points
+agree is the tail of a binomial; the search tried many poses (positions x
+scales x rotations), and the expected number of poses that agree that well
+by chance is::
+
+    NFA = N_tests * P[Binomial(n, p) >= k]
+
+An answer with NFA <= 1 is one false alarm per image at most, on average
+(Desolneux, Moisan and Morel, *From Gestalt Theory to Image Analysis*,
+2008; Grompone von Gioi et al., LSD, IPOL 2012).
+
+``p`` comes from the searched image itself (:class:`Background`): the
+share of the pixel positions near each place, per direction, that lie
+within the match radius of an edge point of that direction, measured over
+cells of :data:`CELL` working pixels and smoothed over 3 x 3 cells.
+Agreement counts distinct image edge points (two pattern points matching
+one edge point agree once) over distinct pixels. Neighbouring points along
+an edge do not agree independently (an edge that lies along the pattern's
+for one pixel does so for several): both counts are divided by
+:data:`DEPENDENCE`, a length in points measured on object-free real photos
+(``bench/bench_nfa.py``, ``docs/nfa.md``). Everything is computed in log10 to keep tiny tails.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import kernels as K
+
+#: Side of a background cell, working pixels (the model is smoothed over
+#: 3 x 3 cells, a window of 24 px: a local density, not the image's).
+CELL = 8
+#: The model samples every STRIDE-th pixel centre in x and y (an unbiased
+#: estimate of each cell's share, at a quarter of the cost).
+STRIDE = 2
+#: Length of edge, in edge points (about pixels), over which agreement is
+#: one observation (see the module docstring): pattern points closer than
+#: that along an edge share one, points farther apart (a frame's points,
+#: spread several pixels apart) are each one. Measured on the tuning part of
+#: bench/bench_nfa.py.
+DEPENDENCE = 2.5
+#: Pattern points within this many working pixels of the image's border
+#: are not counted: the border holds the camera's own straight edges (dark
+#: lines that sensors and video decoders leave, a vignetted rim), which a
+#: shape's straight side fits along its whole length (an L-shaped marker
+#: "found" in the corner of 20 of the 22 Sparus frames).
+BORDER = 3.0
+#: log10 NFA never goes below this (the float stays representable).
+MIN_LOG10_NFA = -300.0
+
+
+@dataclass
+class Background:
+    """Where chance matches are likely in one image: for each cell and
+    direction bin, the share of the pixel positions (smoothed over the
+    3 x 3 cells around) that lie within the match radius of an edge point
+    of that direction, as a cumulative over the bins.
+
+    ``cum[cy, cx, j]`` sums the first ``j`` bins; the bins are about twice
+    the direction tolerance wide, so that one tolerance window spans about
+    one bin.
+    """
+
+    cum: np.ndarray       # (gy, gx, nbins + 1) float64
+    cell: int
+    radius: float
+    origin: tuple = (0, 0)  # the top-left pixel (x, y) of cell (0, 0)
+
+
+def n_direction_bins(tol: float) -> int:
+    """Direction bins of the background model for a tolerance of ``tol``
+    radians: each about ``2 tol`` wide (12 for 15 degrees).
+
+    >>> n_direction_bins(math.radians(15))
+    12
+    """
+    return int(np.clip(round(math.pi / max(tol, 1e-6)), 4, 32))
+
+
+def background(edges, radius: float, tol: float, box=None, index=None) -> Background:
+    """The background model of an image's edge points
+    (:class:`~.keypoints.EdgePoints`) for a match ``radius`` (px) and
+    direction tolerance ``tol`` (radians), over ``box`` (x0, y0, x1, y1,
+    end exclusive; default: the whole image). Points outside the box take
+    the model of its nearest cell.
+    ``index`` is the edge points' index map (made when not given).
+
+    Examples
+    --------
+    >>> from seahough.core.keypoints import find_edge_points
+    >>> from seahough.core.preprocess import compute_gradients
+    >>> img = np.zeros((64, 64), np.float32); img[:, 32:] = 200
+    >>> bg = background(find_edge_points(compute_gradients(img), 50), 1.5, math.radians(15))
+    >>> bg.cum.shape
+    (8, 8, 13)
+    >>> float(bg.cum[:, 0, -1].max()), float(bg.cum[:, 4, -1].max()) > 0.1
+    (0.0, True)
+    """
+    h, w = edges.shape
+    x0, y0, x1, y1 = (0, 0, w, h) if box is None else box
+    x0, y0 = max(int(x0), 0), max(int(y0), 0)
+    x1, y1 = max(min(int(x1), w), x0 + 1), max(min(int(y1), h), y0 + 1)
+    nb = n_direction_bins(tol)
+    if index is None:
+        index = edges.index_map()
+    cum = K.chance_coverage(edges.x, edges.y, edges.angle, index, x0, y0, y1 - y0, x1 - x0,
+                            float(radius), nb, CELL, STRIDE)
+    return Background(cum, CELL, float(radius), (x0, y0))
+
+
+def chance(bg: Background, x, y, direction, tol: float, either: bool) -> np.ndarray:
+    """Probability that a point at (x, y) wanting an edge of ``direction``
+    (radians, within ``tol``) finds one within the background's radius by
+    chance.
+
+    Examples
+    --------
+    >>> bg = Background(np.linspace(0, 1.2, 13)[None, None, :].repeat(2, 0).repeat(2, 1), 8, 1.5)
+    >>> [round(float(v), 3) for v in chance(bg, np.array([3.0, 3.0]), np.array([3.0, 3.0]),
+    ...                                     np.array([0.0, 1.0]), math.radians(15), False)]
+    [0.1, 0.1]
+    """
+    gy, gx, nb1 = bg.cum.shape
+    nb = nb1 - 1
+    cx = np.clip(((np.asarray(x) - bg.origin[0]) // bg.cell).astype(np.int64), 0, gx - 1)
+    cy = np.clip(((np.asarray(y) - bg.origin[1]) // bg.cell).astype(np.int64), 0, gy - 1)
+    cum = bg.cum[cy, cx]                      # (n, nb + 1)
+    total = cum[:, -1]
+    rows = np.arange(cum.shape[0])
+
+    def at(phi):  # cumulative coverage from direction 0 to phi (any real phi), in bins
+        u = phi * (nb / (2 * math.pi))
+        turns = np.floor(u / nb)
+        u = u - turns * nb
+        j = np.minimum(u.astype(np.int64), nb - 1)
+        frac = u - j
+        return turns * total + cum[rows, j] + frac * (cum[rows, j + 1] - cum[rows, j])
+
+    # a window 2 tol wide spans about one bin: its coverage is the bins'
+    # coverage in proportion to the overlap, rescaled to the window's width
+    width = (2.0 * tol) * nb / (2 * math.pi)
+    d = np.asarray(direction, np.float64)
+    p = np.clip((at(d + tol) - at(d - tol)) / max(width, 1e-9), 0.0, 1.0) * min(width, 1.0)
+    if either:
+        q = np.clip((at(d + math.pi + tol) - at(d + math.pi - tol)) / max(width, 1e-9), 0.0, 1.0)
+        p = 1.0 - (1.0 - p) * (1.0 - q * min(width, 1.0))
+    return p
+
+
+def log10_binom_tail(k: float, n: float, p: float) -> float:
+    """log10 P[Binomial(n, p) >= k], exact, in log space (n and k rounded
+    to whole numbers).
+
+    Examples
+    --------
+    >>> round(10 ** log10_binom_tail(1, 2, 0.5), 6)
+    0.75
+    >>> log10_binom_tail(0, 10, 0.3)
+    0.0
+    >>> round(log10_binom_tail(100, 100, 0.1), 6)
+    -100.0
+    """
+    n = int(round(n))
+    k = int(round(k))
+    if k <= 0:
+        return 0.0
+    if k > n or p <= 0.0:
+        return MIN_LOG10_NFA
+    if p >= 1.0:
+        return 0.0
+    # the terms from j = k on, each from the one before (one lgamma in all)
+    j = np.arange(k, n, dtype=np.float64)
+    first = (math.lgamma(n + 1) - math.lgamma(k + 1) - math.lgamma(n - k + 1)
+             + k * math.log(p) + (n - k) * math.log1p(-p))
+    steps = np.log((n - j) / (j + 1)) + (math.log(p) - math.log1p(-p))
+    terms = first + np.concatenate(([0.0], np.cumsum(steps)))
+    top = terms.max()
+    return float((top + math.log(np.exp(terms - top).sum())) / math.log(10.0))
+
+
+def log10_tests(region_area: float, radius: float, scale_range, angle_range,
+                period: float = 360.0, line_span: float | None = None,
+                line_width: float = 0.0) -> float:
+    """log10 of the number of distinct poses a search tries: positions
+    (working pixels of the region where the origin may lie) x rotations x
+    scales, each step moving the pattern's points by about a pixel
+    (``radius``: the pattern's radius in working pixels at scale 1). For a
+    line (``line_span``: the region's diagonal) the positions along it are
+    one answer: its distinct positions are its offsets across it, and its
+    distinct scales those that move its borders (``line_width`` apart) by a
+    pixel.
+
+    Examples
+    --------
+    >>> round(log10_tests(100 * 100, 20.0, (1, 1), (0, 0)), 3)   # the 2-D case
+    4.0
+    >>> log10_tests(100 * 100, 20.0, (0.5, 2.0), (0, 360)) > 7
+    True
+    """
+    s0, s1 = float(scale_range[0]), float(scale_range[1])
+    a0, a1 = float(angle_range[0]), float(angle_range[1])
+    r = max(float(radius), 1.0)
+    n_angle = max(1.0, math.radians(min(a1 - a0, period)) * r * s1)
+    n_scale = max(1.0, (r if line_span is None else 0.5 * line_width) * (s1 - s0))
+    positions = region_area if line_span is None else line_span
+    return math.log10(max(positions, 1.0)) + math.log10(n_angle) + math.log10(n_scale)
+
+
+@dataclass
+class Evidence:
+    """The a-contrario counts of one pose."""
+
+    n: int          # distinct pixels the pattern points fall on, inside the image
+    k: int          # distinct image edge points they match
+    p: float        # mean chance of a match at those points
+    log10_nfa: float
+
+    @property
+    def nfa(self) -> float:
+        return float(10.0 ** self.log10_nfa)
+
+
+def evidence(pose, vx, vy, vang, edges, index, bg: Background, log_tests: float, *,
+             tol: float, either: bool, spacing: float = 1.0) -> Evidence:
+    """The :class:`Evidence` of a pose (working pixels) of the pattern points
+    ``vx, vy, vang`` (``spacing``: their median distance to the nearest
+    other, at scale 1) against an image's edge points.
+
+    ``n`` counts the image edge points the pattern's edges would cover at
+    this pose: a thinned edge has one point per ``max(|cos a|, |sin a|)``
+    pixel of its length (``a``: its direction), and points closer than that
+    share one; ``k`` the distinct edge points matched (at most ``n``).
+    """
+    ids, _ = K.match_points(vx, vy, vang, float(pose.a), float(pose.b), float(pose.tx),
+                            float(pose.ty), edges.x, edges.y, edges.angle, index,
+                            float(bg.radius), float(tol), bool(either))
+    h, w = index.shape
+    step = spacing * math.hypot(pose.a, pose.b)  # between neighbouring points, image px
+    n_eff, m_eff, k, p = K.evidence_counts(
+        vx, vy, vang, float(pose.a), float(pose.b), float(pose.tx), float(pose.ty), ids, bg.cum,
+        int(bg.origin[0]), int(bg.origin[1]), int(bg.cell), int(h), int(w), float(BORDER),
+        float(tol), bool(either), float(step), float(DEPENDENCE))
+    n = int(round(n_eff))
+    if n == 0:
+        return Evidence(0, 0, 0.0, log_tests)
+    k = min(int(k), n)
+    # independent observations: one per DEPENDENCE px of edge at most
+    tail = log10_binom_tail(k * m_eff / n_eff, m_eff, p)
+    return Evidence(n, k, p, max(log_tests + tail, MIN_LOG10_NFA))

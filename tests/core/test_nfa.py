@@ -1,0 +1,168 @@
+"""The a-contrario decision: background model, binomial tail, number of tests,
+and the Detector's max_nfa."""
+
+import math
+from math import comb
+
+import cv2
+import numpy as np
+import pytest
+
+import seahough
+from seahough.core import kernels as K
+from seahough.core import nfa
+from seahough.core.keypoints import find_edge_points
+from seahough.core.preprocess import compute_gradients
+from seahough.errors import ParameterError
+
+
+def _texture(seed=0, shape=(240, 320)):
+    """Blurred noise with strong edges everywhere (grey levels about 128 +- 50)."""
+    rng = np.random.default_rng(seed)
+    img = cv2.GaussianBlur(rng.normal(0, 60, shape).astype(np.float32), (0, 0), 2.0)
+    return 128.0 + img * (50.0 / img.std())
+
+
+@pytest.mark.parametrize("n,k,p", [(100, 30, 0.1), (400, 150, 0.05), (50, 50, 0.3), (10, 1, 0.5),
+                                   (130, 60, 0.15), (20, 3, 0.01)])
+def test_binomial_tail_is_exact(n, k, p):
+    exact = math.log10(sum(comb(n, j) * p ** j * (1 - p) ** (n - j) for j in range(k, n + 1)))
+    assert nfa.log10_binom_tail(k, n, p) == pytest.approx(exact, abs=1e-9)
+
+
+def test_binomial_tail_edges():
+    assert nfa.log10_binom_tail(0, 10, 0.2) == 0.0
+    assert nfa.log10_binom_tail(11, 10, 0.2) == nfa.MIN_LOG10_NFA
+    assert nfa.log10_binom_tail(3, 10, 0.0) == nfa.MIN_LOG10_NFA
+    assert nfa.log10_binom_tail(3, 10, 1.0) == 0.0
+    # a tail this far out stays finite in log space (its float would underflow)
+    assert nfa.log10_binom_tail(1000, 1000, 0.1) == pytest.approx(-1000.0)
+
+
+def test_tests_count_known_and_searched_ranges():
+    area = 200.0 * 100.0
+    assert nfa.log10_tests(area, 30.0, (1, 1), (0, 0)) == pytest.approx(math.log10(area))
+    wide = nfa.log10_tests(area, 30.0, (0.5, 2.0), (0, 360))
+    narrow = nfa.log10_tests(area, 30.0, (0.9, 1.1), (-10, 10))
+    assert wide > narrow > math.log10(area)
+
+
+@pytest.mark.parametrize("either", [False, True])
+def test_background_predicts_the_chance_match_rate(either):
+    """The model's chance of a match, for random points and directions, is the
+    rate at which they do match (overall, and where edges are dense)."""
+    img = _texture(1)
+    img[:, :120] = 128.0  # a bare left part: its chance must be ~0
+    g = compute_gradients(img, 1.0)
+    e = find_edge_points(g, 48.0)
+    h, w = e.shape
+    tol = math.radians(15)
+    bg = nfa.background(e, 1.25, tol)
+    rng = np.random.default_rng(2)
+    n = 40000
+    x, y = rng.uniform(0, w - 1, n), rng.uniform(0, h - 1, n)
+    d = rng.uniform(0, 2 * math.pi, n)
+    ids, _ = K.match_points(x, y, d, 1.0, 0.0, 0.0, 0.0, e.x, e.y, e.angle, e.index_map(),
+                            1.25, tol, either)
+    pred = nfa.chance(bg, x, y, d, tol, either)
+    hit = ids >= 0
+    assert pred.mean() == pytest.approx(hit.mean(), rel=0.15)
+    right = x > 150
+    assert pred[right].mean() == pytest.approx(hit[right].mean(), rel=0.15)
+    bare = x < 100
+    assert pred[bare].max() < 0.01 and hit[bare].mean() < 0.01
+    # twice the chance with either polarity, about
+    if either:
+        single = nfa.chance(bg, x, y, d, tol, False)
+        assert 1.6 < pred.mean() / single.mean() < 2.1
+
+
+def test_background_box_agrees_with_the_whole_image():
+    e = find_edge_points(compute_gradients(_texture(3), 1.0), 48.0)
+    tol = math.radians(15)
+    whole = nfa.background(e, 1.25, tol)
+    part = nfa.background(e, 1.25, tol, (80, 40, 240, 200))
+    rng = np.random.default_rng(0)
+    x, y = rng.uniform(110, 210, 500), rng.uniform(70, 170, 500)
+    d = rng.uniform(0, 2 * math.pi, 500)
+    np.testing.assert_allclose(nfa.chance(part, x, y, d, tol, False),
+                               nfa.chance(whole, x, y, d, tol, False), atol=1e-12)
+
+
+def _rectangle_scene(noise_seed=0, noise=4.0):
+    img = np.full((240, 320), 40, np.uint8)
+    box = cv2.boxPoints(((200.0, 110.0), (90.0, 60.0), -30.0))
+    cv2.fillPoly(img, [np.round(box).astype(np.int32)], 220)
+    rng = np.random.default_rng(noise_seed)
+    return np.clip(img + rng.normal(0, noise, img.shape), 0, 255).astype(np.uint8)
+
+
+def test_a_clear_object_has_a_tiny_nfa_and_max_nfa_filters_it():
+    p = seahough.Pattern.rectangle(60, 40)
+    d = seahough.Detector(p).detect(_rectangle_scene())[0]
+    assert 0.0 <= d.nfa < 1e-6
+    assert d.to_dict()["nfa"] == d.nfa
+    # a caller who accepts less than that gets nothing
+    assert seahough.Detector(p, max_nfa=d.nfa / 10 if d.nfa > 0 else 1e-320).detect(
+        _rectangle_scene()) == [] or d.nfa == 0.0
+
+
+def test_nfa_grows_with_clutter_at_equal_score():
+    """The same object is less surprising in dense texture than on bare sand."""
+    p = seahough.Pattern.rectangle(60, 40)
+    plain = _rectangle_scene(noise=0.0)
+    busy = plain.astype(np.float32)
+    tex = _texture(5, plain.shape)
+    outside = np.ones(plain.shape, bool)
+    box = cv2.boxPoints(((200.0, 110.0), (100.0, 70.0), -30.0))
+    mask = np.zeros(plain.shape, np.uint8)
+    cv2.fillPoly(mask, [np.round(box).astype(np.int32)], 1)
+    outside &= mask == 0
+    busy[outside] = tex[outside]
+    a = seahough.Detector(p, max_nfa=math.inf).detect(plain)[0]
+    b = seahough.Detector(p, max_nfa=math.inf).detect(np.clip(busy, 0, 255).astype(np.uint8))[0]
+    assert abs(b.score - a.score) < 0.1
+    assert b.nfa > 100 * a.nfa
+
+
+def test_object_free_texture_is_not_found_at_the_default():
+    """Nothing in pure texture passes max_nfa=1 even with no score threshold."""
+    p = seahough.Pattern.rectangle(60, 40)
+    for seed in range(3):
+        img = np.clip(_texture(10 + seed), 0, 255).astype(np.uint8)
+        loose = seahough.Detector(p, min_score=0.0, max_nfa=math.inf).detect(img)
+        assert loose, "the search returns its best guesses without a limit"
+        assert all(d.nfa > 1.0 for d in loose)
+        assert seahough.Detector(p, min_score=0.0).detect(img) == []
+
+
+@pytest.mark.parametrize("bad", [0, -1.0, "x", None, float("nan"), True])
+def test_max_nfa_must_be_positive(bad):
+    with pytest.raises(ParameterError, match="max_nfa"):
+        seahough.Detector(seahough.Pattern.rectangle(60, 40), max_nfa=bad)
+
+
+def test_max_nfa_inf_is_no_limit():
+    assert seahough.Detector(seahough.Pattern.rectangle(60, 40), max_nfa=math.inf).max_nfa == math.inf
+
+
+def test_evidence_counts_agree_with_the_model():
+    """The compiled counts use the same background model as nfa.chance, and
+    never count more agreeing points than observed ones."""
+    from seahough.core.refine import Pose
+    img = _texture(7)
+    e = find_edge_points(compute_gradients(img, 1.0), 48.0)
+    idx = e.index_map()
+    tol = math.radians(15)
+    bg = nfa.background(e, 1.25, tol, (40, 30, 280, 210), idx)
+    rng = np.random.default_rng(1)
+    vx, vy = rng.uniform(-60, 60, 300), rng.uniform(-40, 40, 300)
+    vang = rng.uniform(0, 2 * math.pi, 300)
+    pose = Pose.from_params(160.0, 120.0, 1.0, math.radians(20))
+    ev = nfa.evidence(pose, vx, vy, vang, e, idx, bg, 5.0, tol=tol, either=False, spacing=1.0)
+    mx, my = pose.map(vx, vy)
+    want = (vang - math.radians(20)) % (2 * math.pi)
+    assert ev.p == pytest.approx(float(nfa.chance(bg, mx, my, want, tol, False).mean()), rel=1e-9)
+    assert 0 <= ev.k <= ev.n <= 300
+    # the pose turned by 20 degrees: counter-clockwise as displayed, as the kernels take it
+    assert ev.log10_nfa <= 5.0
