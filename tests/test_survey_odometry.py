@@ -17,7 +17,8 @@ import pytest
 
 import seahough
 from seahough import sim as S
-from seahough.geometry import apply_matrix, invert_matrix, matrix_to_pose
+from seahough.geometry import (apply_matrix, compose, invert_matrix, matrix_power,
+                               matrix_to_pose)
 from seahough.io.frames import list_frames
 from seahough.motion import read_odometry_csv, run_odometry
 from seahough.motion.runfiles import RunFolder
@@ -213,8 +214,12 @@ def test_joins_across_bad_shared_frames(tmp_path, scheduler):
     assert s["survey"]["joins"]["exact"] == 2
     assert rows[5]["status"] == "unreadable" and rows[5]["x"] is None
     assert rows[11]["status"] == "assumed"
-    assert rows[11]["flags"].endswith("pose_assumed: zero motion since frame 10")
-    assert (rows[11]["x"], rows[11]["y"]) == (rows[10]["x"], rows[10]["y"])
+    # the last velocity carried on (as a single run does), whichever chunk's row it is
+    assert rows[11]["flags"].endswith("pose_assumed: constant velocity since frame 10")
+    m = [np.reshape(r["matrix"], (2, 3)) if r["matrix"] else None for r in rows]
+    np.testing.assert_allclose(m[11], compose(compose(m[10], invert_matrix(m[9])), m[10]),
+                               atol=1e-6)
+    assert math.hypot(rows[11]["x"] - xy[11][0], rows[11]["y"] - xy[11][1]) < 3.0
     assert [r["index"] for r in rows] == list(range(18))
     assert s["flagged_pairs"] == 2
     for r in rows:
@@ -259,9 +264,15 @@ def test_a_join_that_cannot_be_measured_is_flagged_not_invented(tmp_path, schedu
     assert s["survey"]["joins"]["assumed"] == 1
     r = rows[8]
     assert r["status"] == "assumed" and r["ref"] is None
-    assert r["flags"].endswith("; pose_assumed: zero motion since frame 4")
-    assert r["flags"].split(";")[0] in ("no_motion", "low_confidence", "little_overlap")
-    assert (r["x"], r["y"], r["heading"]) == (rows[4]["x"], rows[4]["y"], rows[4]["heading"])
+    assert r["flags"].endswith("; pose_assumed: constant velocity since frame 4")
+    assert r["flags"].split(";")[0] in ("no_match", "low_confidence", "little_overlap")
+    # frame 4's pose carried on for 4 frames by the motion from 3 to 4
+    m3, m4 = (np.reshape(rows[k]["matrix"], (2, 3)) for k in (3, 4))
+    np.testing.assert_allclose(np.reshape(r["matrix"], (2, 3)),
+                               compose(matrix_power(compose(m4, invert_matrix(m3)), 4), m4),
+                               atol=1e-6)
+    assert r["heading"] == pytest.approx(rows[4]["heading"] + 4 * (rows[4]["heading"] -
+                                                                    rows[3]["heading"]), abs=0.01)
     assert all(q["status"] == "measured" for q in rows[9:])
     # B's motion from its first frame (where the track was left) is B's truth
     m8 = np.reshape(rows[8]["matrix"], (2, 3))

@@ -14,16 +14,23 @@ from ..io.frames import FrameReader
 from ..io.images import to_bgr8, write_image
 from .track import iter_odometry_csv
 
-def _posed(csv_path):
+
+def _posed(csv_path, counts: dict | None = None):
     """(index, inverse cumulative matrix) of the frames with a measured pose, from the CSV.
 
-    Frames whose pose is only assumed (a gap) are left out: their place is a guess."""
+    Frames whose pose is only assumed (a gap) are left out: their place is a
+    guess (counted in ``counts["left_out"]`` when given)."""
     for r in iter_odometry_csv(csv_path):
-        if r.get("matrix") is not None and r["status"] in ("origin", "measured"):
+        if r.get("matrix") is None:
+            continue
+        if r["status"] in ("origin", "measured"):
             yield r["index"], invert_matrix(np.asarray(r["matrix"]).reshape(2, 3))
+        elif counts is not None:
+            counts["left_out"] += 1
 
 
-def build_mosaic(csv_path, reader: FrameReader, shape, path: Path, max_side: int = 4000):
+def build_mosaic(csv_path, reader: FrameReader, shape, path: Path, max_side: int = 4000, *,
+                 counts: dict | None = None):
     """Frames placed by the trajectory on one canvas (frame-0 pixels).
 
     Each canvas pixel comes from the frame that saw it nearest to that
@@ -31,12 +38,23 @@ def build_mosaic(csv_path, reader: FrameReader, shape, path: Path, max_side: int
     Memory does not grow with the number of frames: the canvas is at most
     ``max_side`` pixels on its longer side (frames are shrunk to fit), the
     poses are read from the CSV twice (extent, then placing) and the frames
-    one at a time."""
+    one at a time.
+
+    Only measured poses (and the origin) are placed: a frame whose pose is
+    assumed (status ``assumed``: the motion of its pair could not be
+    measured) is never stacked on the others. ``counts``, when given, gets
+    ``"left_out"``: how many frames with a pose are not in the mosaic (their
+    pose assumed, or the frame unreadable when the mosaic is built).
+
+    Returns the mosaic's path, or None when no frame has a measured pose.
+    """
+    if counts is not None:
+        counts["left_out"] = 0
     h, w = shape
     corners = np.array([[-0.5, -0.5], [w - 0.5, -0.5], [w - 0.5, h - 0.5], [-0.5, h - 0.5]])
     x0 = y0 = math.inf
     x1 = y1 = -math.inf
-    for _, inv in _posed(csv_path):
+    for _, inv in _posed(csv_path, counts):
         q = apply_matrix(inv, corners)
         x0, y0 = min(x0, q[:, 0].min()), min(y0, q[:, 1].min())
         x1, y1 = max(x1, q[:, 0].max()), max(y1, q[:, 1].max())
@@ -56,8 +74,10 @@ def build_mosaic(csv_path, reader: FrameReader, shape, path: Path, max_side: int
         try:
             img = to_bgr8(reader.raw(index))
         except (ImageError, OSError):
-            continue
-        if img.shape[:2] != (h, w):
+            img = None
+        if img is None or img.shape[:2] != (h, w):
+            if counts is not None:
+                counts["left_out"] += 1
             continue
         m = compose(place, inv)
         fp = apply_matrix(m, corners)

@@ -6,8 +6,10 @@ every consecutive pair. The motion of the last frames predicts where the
 keyframe lies in the next one, so the search is narrowed to a small window of
 position, rotation and scale around that prediction (the fast path); when
 that fails, the full search against the keyframe, then against the previous
-frame, takes over. A pair that still cannot be measured is flagged, never
-silently invented.
+frame, then a wider search against the last measured frame take over. A
+pair that still cannot be measured is flagged with what happened, and its
+pose is assumed, as it says: the last measured pose carried on by the last
+velocity, never passed off as measured (nor stacked in the mosaic).
 
 A dive of 6 simulated frames (a folder, a video or a list of paths work alike):
 
@@ -43,7 +45,6 @@ import json
 import os
 import sys
 import time
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -51,15 +52,14 @@ from .._validate import check_workers, pair
 from ..config import ODOMETRY_CONFIG, Config, OdometryTuning
 from ..core.accumulator import check_ranges
 from ..errors import ParameterError, SeahoughError, WriteError
-from ..geometry import (angle_difference, apply_matrix, compose, frame_centre, invert_matrix,
-                        matrix_power, matrix_to_pose, nearest_similarity, overlap,
-                        shift_origin, wrap_angle)
+from ..geometry import apply_matrix, compose, invert_matrix, matrix_power, nearest_similarity
 from ..io.frames import FrameReader, list_frames
 from ..io.images import to_gray
 from .mosaic import build_mosaic
 from .prefetch import Prefetch, overlapped
 from .state import Frame, State, advance, ref_cum
-from .pair import content_box, frame_factor, frame_features, search_pair
+from .pair import content_box
+from .searcher import WIDEN, Searcher as _Searcher
 from .runfiles import (RunFolder, check_kept_row, open_track, run_settings, settings_hash,
                        write_output, write_row)
 from .track import (CSV_BASE, CSV_CHECK, CSV_METRIC, CSV_MORE, OdometryResult, Totals,
@@ -72,139 +72,6 @@ __all__ = ["run_odometry", "ODOMETRY_CONFIG", "OdometryTuning"]
 TUNING = OdometryTuning()
 
 _IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
-
-
-@dataclass
-class _Measure:
-    matrix: np.ndarray        # reference frame -> current frame
-    confidence: float
-    score: float
-    overlap: float
-    ref: int
-    method: str
-    nfa: float = float("nan")   # reported (odometry's decisions do not use it)
-
-
-class _Searcher:
-    """The three kinds of search, on frames cropped to the content box
-    (matrices in and out are in full-frame pixels)."""
-
-    def __init__(self, box, scale_range, angle_range, cfg: Config, tuning: OdometryTuning):
-        self.box = box
-        self.tuning = tuning
-        self.off = (float(box[0]), float(box[1]))
-        shape = (box[3] - box[1], box[2] - box[0])
-        self.shape = shape
-        self.s_range = scale_range
-        self.a_range = angle_range
-        self.cfg = cfg
-        # inside the small prior window one runner-up is enough to rate the peak
-        self.prior_cfg = cfg.replace(n_candidates=min(cfg.n_candidates, tuning.prior_candidates))
-        self.s_known = scale_range[0] == scale_range[1]
-        self.a_known = angle_range[0] == angle_range[1]
-        h, w = shape
-        self.factor = frame_factor(shape, cfg, scale_range)
-        step = (cfg.translation_bin or 6.0) / self.factor
-        self.prior_radius = max(tuning.prior_radius * max(w, h), tuning.prior_bins * step)
-
-    def crop(self, gray):
-        x0, y0, x1, y1 = self.box
-        return np.ascontiguousarray(gray[y0:y1, x0:x1])
-
-    def features(self, gray):
-        """Features of a cropped frame."""
-        return frame_features(gray, self.cfg, self.s_range)
-
-    def _run(self, pattern, gray, feats, s_range, a_range, region, cfg):
-        (s0, s1), (a0, a1) = s_range, a_range
-        s_range = (max(s0, 1e-3), max(s1, s0, 1e-3))
-        if s_range[1] / s_range[0] > 60:
-            s_range = (s_range[0], s_range[0] * 60)
-        return search_pair(pattern, gray, s_range, (a0, a1), region,
-                           min_score=self.tuning.min_score, config=cfg, features=feats)
-
-    def _ranges_around(self, base, n: int):
-        """Scale and angle ranges of the user's per-pair ranges, ``n`` frames
-        on from the motion ``base`` (reference -> last measured frame)."""
-        m = min(n, self.tuning.max_span)      # known quantities go on exactly, ranges widen at most m
-        _, _, bs, ba = matrix_to_pose(base, frame_centre(self.shape))
-        ba = wrap_angle(ba, low=-180.0)
-        s0, s1 = self.s_range
-        a0, a1 = self.a_range
-        if self.s_known:
-            sr = (bs * s0 ** n,) * 2
-        else:
-            sr = (bs * s0 ** m, bs * s1 ** m)
-        if self.a_known:
-            ar = (ba + a0 * n,) * 2
-        else:
-            lo, hi = ba + a0 * m, ba + a1 * m
-            if hi - lo > 360:
-                lo, hi = ba - 180.0, ba + 180.0
-            ar = (lo, hi)
-        return sr, ar
-
-    def measure(self, ref: Frame, gray, feats, predicted, base, n: int, method: str,
-                ref_rate: float | None = None):
-        """Motion of ``ref`` into the current frame, or (None, reason).
-
-        ``predicted``: the expected motion (prior window around it); else
-        ``base`` (the motion to the last measured frame) and the user's
-        ranges widened over ``n`` frames."""
-        pattern = ref.get_pattern(self.cfg)
-        if pattern is None:
-            return None, "no_motion"
-        h, w = self.shape
-        c = frame_centre(self.shape)
-        ox, oy = self.off
-        if predicted is not None:
-            predicted = shift_origin(predicted, ox, oy)
-        if base is not None:
-            base = shift_origin(base, ox, oy)
-        if predicted is not None:
-            px, py, ps, pa = matrix_to_pose(predicted, c)
-            pa = wrap_angle(pa, low=-180.0)
-            r = self.prior_radius
-            region = (px - r, py - r, px + r, py + r)
-            t = self.tuning
-            sr = (ps,) * 2 if self.s_known else (ps / t.prior_scale, ps * t.prior_scale)
-            if self.a_known:
-                ar = (pa,) * 2
-            else:
-                ar = (pa - t.prior_angle, pa + t.prior_angle)
-        else:
-            bx, by = apply_matrix(base, [c])[0]
-            sr, ar = self._ranges_around(base, n)
-            span = min(n, self.tuning.max_span)
-            mx, my = self.tuning.full_shift * w * span, self.tuning.full_shift * h * span
-            region = (bx - mx, by - my, bx + mx, by + my)
-        try:
-            d = self._run(pattern, gray, feats, sr, ar, region,
-                          self.prior_cfg if predicted is not None else self.cfg)
-        except SeahoughError:
-            d = None
-        if d is None:
-            return None, "no_motion"
-        m = nearest_similarity(d.matrix)
-        ov = overlap(m, w, h)
-        t = self.tuning
-        if d.confidence < t.min_confidence:
-            return None, "low_confidence"
-        if ov < t.min_overlap:
-            return None, "little_overlap"
-        if ref_rate is not None and d.score / max(ov, 1e-6) < t.min_relative * ref_rate:
-            return None, "low_confidence"
-        if predicted is not None:
-            # the refined pose must stay inside the prior window (else the
-            # prior was wrong and the window cut the true peak off)
-            x0, y0, x1, y1 = region
-            slack = 0.25 * self.prior_radius
-            ang = angle_difference(d.angle, pa)
-            if not (x0 - slack <= d.x <= x1 + slack and y0 - slack <= d.y <= y1 + slack) or \
-                    abs(ang) > t.prior_angle + 2.0:
-                return None, "no_motion"
-        return _Measure(shift_origin(m, -ox, -oy), float(d.confidence), float(d.score), ov, ref.index,
-                        method, float(d.nfa)), ""
 
 
 def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal_px=None,
@@ -247,7 +114,10 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
         A tqdm progress bar on stderr (shown only when stderr is a terminal).
     mosaic : bool
         Build ``mosaic.png`` (needs the frames read a second time; at most
-        4000 px on its longer side, the frames shrunk to fit).
+        4000 px on its longer side, the frames shrunk to fit). Frames whose
+        pose is assumed are left out of it (their place is a guess): the
+        summary's ``mosaic_left_out`` counts the frames with a pose that are
+        not in it (None when no mosaic was built).
     config : seahough.Config, optional
         Search tuning (default :data:`~seahough.config.ODOMETRY_CONFIG`).
     tuning : seahough.config.OdometryTuning, optional
@@ -289,6 +159,12 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
        ``angle_range`` around the last measured motion and +-half a frame.
     3. ``previous``: against the previous readable frame (when it is not
        the keyframe), full search; it then becomes the keyframe.
+    4. ``wide``: the last try before the pair is flagged: against the last
+       measured frame, with twice the full search's shift region (+-a whole
+       frame) and the ranges widened as for twice the frames (``scale_range``
+       squared, ``angle_range`` doubled; known quantities stay known); it
+       then becomes the keyframe. A sudden jump, turn or change of altitude
+       beyond the per-frame ranges is measured here, not flagged.
 
     A keyframe measurement of confidence below 0.35 (an old keyframe, or a
     look-alike of it: a tile or a ripple one period on) is checked by a full
@@ -307,19 +183,28 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     to overlap the keyframe by less than 60 %, or when the keyframe's edges
     match less than 0.6 times as well as at its first measurement (the
     scene's look changed). Flags (a frame with flags is a pair that could
-    not be measured or a frame that could not be read):
+    not be measured or a frame that could not be read; docs/odometry.md):
 
     - ``unreadable: <reason>``: missing, corrupt, truncated, wrong size,
       too small to measure (a side under 64 px), a broken link or a folder
       among the frames, a video frame the decoder cannot give;
       the row has no pose, the state is kept and the next readable frame is
       measured against the keyframe across the gap.
-    - ``no_motion`` / ``low_confidence`` / ``little_overlap``: no step
-      found the motion (reason of the best attempt); the frame gets the
-      last known pose, flagged ``pose_assumed: zero motion since frame N``
-      (the pose across the gap is unknown: zero motion is assumed, never
-      anything else); the next frame is searched against the keyframe and
-      against this frame, so the trajectory goes on from the next good pair.
+    - ``no_match`` (no pose of the reference frame was found in this one),
+      ``low_confidence`` (one was found, but not distinct from its
+      runner-up, or matching far worse than the last frames did),
+      ``little_overlap`` (one was found, but too little of the reference is
+      in view): no step measured the pair (the reason of the best attempt).
+      The frame's pose is *assumed*: the last measured pose carried on by
+      the last measured motion per frame, flagged ``pose_assumed: constant
+      velocity since frame N`` (N: the last measured frame); before any
+      motion was measured (the second frame), the last measured pose,
+      flagged ``pose_assumed: zero motion since frame N``. An assumed pose
+      never feeds the motion per frame; it is in the CSV (status
+      ``assumed``), the plot (a hollow marker) and the summary
+      (``assumed_poses``), but not in the mosaic (``mosaic_left_out``).
+      The next frame is searched against the keyframe and against this
+      frame, so the trajectory goes on from the next good pair.
     """
     t_start = time.perf_counter()
     cfg = config or ODOMETRY_CONFIG
@@ -492,11 +377,12 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
     frames_mem.clear()
 
     # ---- outputs (from the CSV, one row at a time; the two pictures at once)
+    placed: dict = {}
     def draw_mosaic():
         if not (mosaic and st.shape is not None):
             return None
         return write_output(out / "mosaic.png", lambda: build_mosaic(
-            csv_path, reader, st.shape, out / "mosaic.png"))
+            csv_path, reader, st.shape, out / "mosaic.png", counts=placed))
 
     def draw_track():
         return write_output(out / "trajectory.png", lambda: plot_track(
@@ -506,6 +392,7 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
     reader.close()
     summary = summarise(totals, items, mpp, scale_range, angle_range, cfg, tuning, n_resumed,
                         time.perf_counter() - t_start, *given)
+    summary["mosaic_left_out"] = placed.get("left_out")
     summary["outputs"] = {"csv": str(csv_path), "json": str(json_path),
                           "mosaic": None if mosaic_path is None else str(mosaic_path),
                           "trajectory": str(trajectory_path)}
@@ -520,7 +407,7 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
 
 
 def _measure_frame(row, i, gray, feats, st: State, searcher: _Searcher, load):
-    """Steps 1-3 of run_odometry's notes; fills ``row`` (status, matrix...)."""
+    """Steps 1-4 of run_odometry's notes; fills ``row`` (status, matrix...)."""
     key = load(st.key)
     ref_rate = float(np.median(st.rates)) if len(st.rates) >= 2 else None
     reasons = []
@@ -541,11 +428,13 @@ def _measure_frame(row, i, gray, feats, st: State, searcher: _Searcher, load):
                                     ref_rate)
         reasons.append(why)
     if res is None:
-        row["status"] = "assumed"
-        row["_cum"] = st.last_pose_cum.copy()
-        why = "low_confidence" if "low_confidence" in reasons else (
-            "little_overlap" if "little_overlap" in reasons else "no_motion")
-        row["flags"] = f"{why}; pose_assumed: zero motion since frame {st.meas}"
+        # the last attempt: the last measured frame, a wider shift region and wider ranges
+        res, why = searcher.measure(load(st.meas), gray, feats, None, _IDENTITY, n, "wide",
+                                    ref_rate, widen=WIDEN)
+        reasons.append(why)
+    if res is None:
+        _assume(row, st, "low_confidence" if "low_confidence" in reasons else (
+            "little_overlap" if "little_overlap" in reasons else "no_match"))
         return
     if (res.ref == st.key and res.confidence < searcher.tuning.doubtful and st.meas is not None
             and st.meas != st.key):
@@ -558,6 +447,21 @@ def _measure_frame(row, i, gray, feats, st: State, searcher: _Searcher, load):
     row["nfa"] = res.nfa
     row["score"] = res.score
     row["overlap"] = res.overlap
+
+
+def _assume(row, st: State, why: str) -> None:
+    """A pair that could not be measured: the last measured pose carried on
+    by the last measured velocity (zero motion when none is known yet),
+    flagged with ``why`` and the assumption."""
+    n = row["index"] - st.meas
+    row["status"] = "assumed"
+    if st.vel is not None:
+        row["_cum"] = compose(matrix_power(st.vel, n), st.meas_cum)
+        how = "constant velocity"
+    else:
+        row["_cum"] = st.meas_cum.copy()
+        how = "zero motion"
+    row["flags"] = f"{why}; pose_assumed: {how} since frame {st.meas}"
 
 
 def _checked(res, i, gray, feats, st: State, searcher: _Searcher, load, ref_rate):

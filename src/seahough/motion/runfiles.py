@@ -33,10 +33,18 @@ except ImportError:                   # pragma: no cover
     fcntl = None
 
 __all__ = ["RunFolder", "run_settings", "settings_hash", "settings_changes", "same_frame",
-           "check_kept_row", "open_track", "write_row", "write_output"]
+           "format_change", "check_kept_row", "open_track", "write_row", "write_output"]
 
-#: Bumped when the rows a run writes change for the same settings.
-SETTINGS_FORMAT = 1
+#: Bumped when the rows a run writes change for the same settings (2: a pair
+#: that cannot be measured gets a ``wide`` last try, and an assumed pose
+#: carries the last velocity on; format 1 assumed zero motion): a run of
+#: another format is not continued by ``resume``.
+SETTINGS_FORMAT = 2
+#: What changed in the rows at each format (for the message refusing to
+#: resume a run of an earlier one).
+FORMAT_CHANGES = {2: "frames whose motion could not be measured now get a wider last search, "
+                     "and their assumed pose carries the last velocity on instead of zero "
+                     "motion"}
 LOCK_NAME = ".seahough.lock"
 OUTPUTS = ("summary.json", "mosaic.png", "trajectory.png")
 
@@ -47,7 +55,7 @@ def run_settings(scale_range, angle_range, metres_per_pixel, config, tuning) -> 
     >>> from seahough.config import ODOMETRY_CONFIG, OdometryTuning
     >>> s = run_settings((0.9, 1.1), (-20, 20), None, ODOMETRY_CONFIG, OdometryTuning())
     >>> s["scale_range"], s["angle_range"], s["metres_per_pixel"], s["format"]
-    ([0.9, 1.1], [-20.0, 20.0], None, 1)
+    ([0.9, 1.1], [-20.0, 20.0], None, 2)
     """
     return {"format": SETTINGS_FORMAT,
             "scale_range": [float(v) for v in scale_range],
@@ -247,6 +255,9 @@ class RunFolder:
         rec = self.read_settings()
         if rec is None:
             return None
+        why = format_change(rec["settings"], settings)
+        if why:
+            raise ParameterError(f"{self.csv}: {why}; run without --resume to measure it again")
         if rec.get("settings_hash") != digest:
             changes = settings_changes(rec["settings"], settings)
             more = f"; and {len(changes) - 4} more" if len(changes) > 4 else ""
@@ -255,6 +266,29 @@ class RunFolder:
                 f"{more}. Resume with the run's settings, or run without --resume")
         cwd = rec.get("cwd")
         return cwd if isinstance(cwd, str) else None
+
+
+def format_change(old: dict, new: dict) -> str:
+    """Why a run of settings ``old`` cannot be continued by one of ``new``
+    because a seahough of another row format made it ("" when the format is
+    the same).
+
+    >>> why = format_change({"format": 1}, {"format": 2})
+    >>> why[:58]
+    'the run was made by an earlier seahough (run format 1, now'
+    >>> "instead of zero motion" in why
+    True
+    >>> format_change({"format": 2}, {"format": 2})
+    ''
+    """
+    a, b = old.get("format"), new.get("format")
+    if a == b:
+        return ""
+    if isinstance(a, int) and isinstance(b, int) and a < b:
+        what = "; ".join(FORMAT_CHANGES[k] for k in range(a + 1, b + 1) if k in FORMAT_CHANGES)
+        return (f"the run was made by an earlier seahough (run format {a}, now {b}"
+                f"{': ' + what if what else ''})")
+    return f"the run was made by another seahough (run format {json.dumps(a)}, now {b})"
 
 
 def check_kept_row(csv_path, pos: int, row: dict, reader, digest: str, old_cwd) -> None:
@@ -284,8 +318,8 @@ def check_kept_row(csv_path, pos: int, row: dict, reader, digest: str, old_cwd) 
                              "checks (frame and settings hashes); run without --resume")
     if row["settings_hash"] != digest:
         raise ParameterError(f"{csv_path}: row {pos} was measured with other settings (scale or "
-                             "angle range, metres per pixel, config or tuning); resume with the "
-                             "run's settings, or run without --resume")
+                             "angle range, metres per pixel, config or tuning) or by another "
+                             "seahough; resume with the run's settings, or run without --resume")
     image = None
     if reader.is_video(pos):
         try:

@@ -49,8 +49,9 @@ class OdometryResult:
         displayed, size change),
         ``score, overlap`` (of the measurement), ``ref`` (index of the frame
         it was measured against), ``method`` (``"prior"``, ``"full"``,
-        ``"previous"``: see :func:`run_odometry`'s notes), ``status``
-        (``"origin"``, ``"measured"``, ``"assumed"``, ``"unreadable"``),
+        ``"previous"``, ``"wide"``: see :func:`run_odometry`'s notes), ``status``
+        (``"origin"``, ``"measured"``, ``"assumed"``: a pose carried on from
+        the last measured one, see the ``flags``; ``"unreadable"``),
         ``ms``, ``matrix`` and
         ``pair_matrix`` (2x3 as 6 floats, row-major), ``frame_hash`` and
         ``settings_hash`` (what ``resume`` checks: the frame's content and
@@ -290,7 +291,8 @@ def plot_track(csv_path, path: Path, metric: bool):
 
     kx, ky = ("x_m", "y_m") if metric else ("x", "y")
     plot_rows = [{"x": r.get(kx), "y": r.get(ky), "heading": r.get("heading"),
-                  "flags": r.get("flags")} for r in iter_odometry_csv(csv_path)]
+                  "flags": r.get("flags"), "status": r.get("status")}
+                 for r in iter_odometry_csv(csv_path)]
     plot_trajectory(plot_rows, path, unit="m" if metric else "px")
     return path
 

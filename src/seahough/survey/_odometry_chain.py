@@ -14,8 +14,14 @@ go back, through the chunk's own keyframes, to an *assumed* pose before it
 frame is usable, the chunk's first readable frame is measured directly
 against the trajectory's last measured frame (as run_odometry does across a
 gap); when that fails too, its pose is assumed and flagged as run_odometry
-flags one (``pose_assumed: zero motion since frame N``), and the rest of the
-chunk follows from it.
+flags one: the last measured pose carried on by the last measured motion per
+frame (``pose_assumed: constant velocity since frame N``; with no motion
+measured yet, ``pose_assumed: zero motion since frame N``), and the rest of
+the chunk follows from it. A pose the chunk itself assumed with zero motion
+(its run had not measured any motion yet: a failure in its first frames) is
+assumed again with the trajectory's velocity when it has one, and the
+chunk's poses measured from it move with it, as a single run would have
+placed them.
 
 Memory holds one chunk's rows at a time (plus the rows of the chunk before
 that are not written yet: those after its last join candidate).
@@ -33,14 +39,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ImageError, SeahoughError
-from ..geometry import compose, invert_matrix, nearest_similarity
+from ..geometry import compose, invert_matrix, matrix_power, nearest_similarity
 from ..motion.pair import estimate_motion
 from ..motion.track import iter_odometry_csv, pose_columns, row_to_csv
 
 __all__ = ["shift_flags", "read_chunk", "Chain", "measure_across"]
 
 POSED = ("origin", "measured")
-_SINCE = re.compile(r"(pose_assumed: zero motion since frame )(\d+)")
+_ZERO = "pose_assumed: zero motion since frame "
+_SINCE = re.compile(r"(pose_assumed: (?:zero motion|constant velocity) since frame )(\d+)")
 _IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 _PAIR = ("dx", "dy", "rotation", "scale_change", "pair_matrix")
 _MEASURE = ("confidence", "nfa", "score", "overlap")
@@ -49,8 +56,10 @@ _MEASURE = ("confidence", "nfa", "score", "overlap")
 def shift_flags(flags: str, start: int) -> str:
     """A chunk row's flags with the frame numbers it names made global.
 
-    >>> shift_flags("no_motion; pose_assumed: zero motion since frame 7", 400)
-    'no_motion; pose_assumed: zero motion since frame 407'
+    >>> shift_flags("no_match; pose_assumed: constant velocity since frame 7", 400)
+    'no_match; pose_assumed: constant velocity since frame 407'
+    >>> shift_flags("little_overlap; pose_assumed: zero motion since frame 0", 400)
+    'little_overlap; pose_assumed: zero motion since frame 400'
     >>> shift_flags("unreadable: frame 7 cannot be decoded", 400)    # the video's own number
     'unreadable: frame 7 cannot be decoded'
     """
@@ -163,19 +172,39 @@ def _unjoined(rows, j: int, parent, anchor) -> set:
 @dataclass
 class _Cursor:
     """The trajectory as it stands after a row: its last posed row
-    (index, global matrix, heading), last measured row and the row itself."""
+    (index, global matrix, heading), last measured row, the row itself, and
+    the last measured motion per frame (between two measured poses with no
+    assumed one between them: an assumed pose never feeds it).
+
+    >>> c = _Cursor()
+    >>> for i, x in enumerate((0.0, -5.0, -10.0)):
+    ...     c.update({"index": i, "status": "measured" if i else "origin", "heading": 0.0,
+    ...               "_G": np.array([[1.0, 0.0, x], [0.0, 1.0, 0.0]])})
+    >>> (np.round(c.vel, 6) + 0.0).tolist()
+    [[1.0, 0.0, -5.0], [0.0, 1.0, 0.0]]
+    """
 
     pose: tuple | None = None       # (index, G, heading)
     measured: tuple | None = None   # (index, G)
     prev: tuple | None = None       # (index, G or None)
+    vel: np.ndarray | None = None   # motion per frame (frame-to-frame matrix)
+    pose_measured: bool = False     # is ``pose`` a measured one (or the origin)?
 
     def update(self, r):
         g = r.get("_G")
         self.prev = (r["index"], g)
-        if g is not None:
-            self.pose = (r["index"], g, r["heading"])
-            if r["status"] in POSED:
-                self.measured = (r["index"], g)
+        if g is None:
+            return
+        measured = r["status"] in POSED
+        if r["status"] == "origin":
+            self.vel = None
+        elif measured and self.pose is not None and self.pose_measured:
+            self.vel = matrix_power(compose(g, invert_matrix(self.pose[1])),
+                                    1.0 / max(r["index"] - self.pose[0], 1))
+        self.pose = (r["index"], g, r["heading"])
+        self.pose_measured = measured
+        if measured:
+            self.measured = (r["index"], g)
 
 
 def measure_across(reader, p: int, q: int, scale_range, angle_range, config, tuning):
@@ -195,9 +224,9 @@ def measure_across(reader, p: int, q: int, scale_range, angle_range, config, tun
                              max_shift=min(1.5, tuning.full_shift * m), min_confidence=0.0,
                              min_score=tuning.min_score, max_nfa=math.inf, config=config)
     except (SeahoughError, OSError):
-        return None, "no_motion"
+        return None, "no_match"
     if mo is None:
-        return None, "no_motion"
+        return None, "no_match"
     if mo.confidence < tuning.min_confidence:
         return None, "low_confidence"
     if mo.overlap < tuning.min_overlap:
@@ -277,18 +306,38 @@ class Chain:
             x = self._join(new[q], cursor)
         out = []
         rewritten_prev = False
+        # a pose the chunk assumed with zero motion (before it had measured any
+        # motion) is assumed again here with the trajectory's velocity, and the
+        # chunk's poses made from it follow: {index: global correction}
+        moved: dict = {}
+        last_measured = None                           # (the chunk's, as its run saw it)
         for r in tail:
             i = r["index"]
+            status = r["status"]
             rewritten = i == q
             if r["_cum"] is None:
                 r["_G"] = None
             elif i == q:
                 pass                                   # placed by _join
             elif i in bad:
-                self._assume(r, cursor, "no_motion")
+                self._assume(r, cursor, "no_match")
                 rewritten = True
             else:
-                r["_G"] = nearest_similarity(compose(r["_cum"], x))
+                g = nearest_similarity(compose(r["_cum"], x))
+                if status == "assumed" and _ZERO in r["flags"] and cursor.vel is not None:
+                    self._assume(r, cursor, r["flags"].split(";")[0])
+                    moved[i] = compose(invert_matrix(g), r["_G"])
+                    rewritten = True
+                else:
+                    c = moved.get(r["ref"] if status == "measured" else
+                                  last_measured if status == "assumed" else None)
+                    if c is not None:
+                        g = nearest_similarity(compose(g, c))
+                        moved[i] = c
+                        rewritten = True
+                    r["_G"] = g
+            if status in POSED:
+                last_measured = i
             if r["_G"] is not None:
                 prev = cursor.prev[1] if cursor.prev is not None and \
                     cursor.prev[0] == i - 1 else None
@@ -332,10 +381,18 @@ class Chain:
 
     @staticmethod
     def _assume(row, cursor: _Cursor, why: str) -> None:
-        """The row gets the trajectory's last pose, flagged as run_odometry flags it."""
+        """The row gets the trajectory's last measured pose carried on by the
+        last measured motion per frame (zero motion when none is known),
+        flagged as run_odometry flags it."""
+        p, g = cursor.measured if cursor.measured is not None else cursor.pose[:2]
+        if cursor.vel is not None:
+            g = nearest_similarity(compose(matrix_power(cursor.vel, row["index"] - p), g))
+            how = "constant velocity"
+        else:
+            g = g.copy()
+            how = "zero motion"
         row.update({k: None for k in (*_PAIR, *_MEASURE, "ref")}, method="",
-                   status="assumed", _G=cursor.pose[1].copy(),
-                   flags=f"{why}; pose_assumed: zero motion since frame {cursor.measured[0]}")
+                   status="assumed", _G=g, flags=f"{why}; pose_assumed: {how} since frame {p}")
 
     def finish(self) -> None:
         """Write the rows still held."""

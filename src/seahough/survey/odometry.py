@@ -33,8 +33,8 @@ from ..core.accumulator import check_ranges
 from ..errors import ParameterError, SeahoughError, WriteError
 from ..io.frames import FrameReader, list_frames
 from ..motion.mosaic import build_mosaic
-from ..motion.runfiles import (RunFolder, run_settings, settings_changes, settings_hash,
-                               write_output)
+from ..motion.runfiles import (RunFolder, format_change, run_settings, settings_changes,
+                               settings_hash, write_output)
 from ..motion.track import (CSV_BASE, CSV_CHECK, CSV_METRIC, CSV_MORE, Totals, plot_track,
                             resolve_metres_per_pixel, summarise)
 from ._cluster import open_client
@@ -65,6 +65,10 @@ def _check_same_survey(run: RunFolder, settings: dict) -> None:
     old = run.read_settings()
     if old is None:
         return
+    why = format_change(old["settings"], settings)
+    if why:
+        raise ParameterError(f"{run.path}: holds a survey that {why.removeprefix('the run ')}. "
+                             "Use another --out, or remove the folder to start over")
     changes = [c for c in settings_changes(old["settings"], settings)
                if not c.startswith("metres_per_pixel ")]
     if changes:
@@ -175,15 +179,19 @@ def odometry(frames, out, *, workers=None, scheduler=None, chunk_size=200,
     Notes
     -----
     The rows have ``run_odometry``'s columns and meanings, with global frame
-    numbers (``index``, ``ref``, ``zero motion since frame N``), and
+    numbers (``index``, ``ref``, ``... since frame N``), and
     positions, headings and matrices in the first frame's pixels; each
     frame's row is written once. A chunk's poses are placed by the last
     frame it shares with the chunk before that both measured (their joins
     add no error; the chunks' own keyframes make the poses differ from a
     single run by about a pixel). When no shared frame was measured in both
     (e.g. all unreadable), the chunk's first frame is measured against the
-    last measured frame before it; failing that, its pose is assumed and
-    flagged ``pose_assumed: zero motion since frame N``, never invented.
+    last measured frame before it; failing that, its pose is assumed (the
+    last measured pose carried on by the last measured motion per frame) and
+    flagged ``pose_assumed: constant velocity since frame N`` (``zero
+    motion`` when no motion was measured yet), never passed off as
+    measured; assumed poses are left out of the mosaic (``mosaic_left_out``
+    in the summary).
     ``summary.json`` also says how the chunks went (``survey``: chunks kept
     from an earlier run, measured, resumed from the rows of a run cut short,
     and the joins of each kind).
@@ -292,15 +300,17 @@ def _chain_and_write(run: RunFolder, reader, items, results, columns, digest, mp
 
     out = run.path
     paths = {"csv": run.csv}
+    placed: dict = {}
     if mosaic and shape is not None:
         made = write_output(out / "mosaic.png", lambda: build_mosaic(
-            run.csv, reader, shape, out / "mosaic.png"))
+            run.csv, reader, shape, out / "mosaic.png", counts=placed))
         if made is not None:
             paths["mosaic"] = Path(made)
     paths["trajectory"] = Path(write_output(out / "trajectory.png", lambda: plot_track(
         run.csv, out / "trajectory.png", bool(mpp))))
     summary = summarise(totals, items, mpp, scale_range, angle_range, cfg, tuning, kept_rows,
                         time.perf_counter() - t_start, *given)
+    summary["mosaic_left_out"] = placed.get("left_out")
     states = [r["state"] for r in results]
     summary["survey"] = {"chunks": len(results), "chunk_size": chunk_size, "overlap": OVERLAP,
                          "kept": states.count("kept"), "measured": states.count("measured"),

@@ -27,15 +27,31 @@ def _num(v):
     return f
 
 
+def _assumed(row) -> bool:
+    """Is the row's pose assumed (status ``"assumed"``, or a ``pose_assumed``
+    flag when the rows have no status)?
+
+    >>> _assumed({"status": "assumed"}), _assumed({"flags": "no_match; pose_assumed: x"})
+    (True, True)
+    >>> _assumed({"status": "measured", "flags": ""}), _assumed({"flags": ["lost"]})
+    (False, False)
+    """
+    if row.get("status") is not None:
+        return row["status"] == "assumed"
+    flags = row.get("flags") or ""
+    flags = [flags] if isinstance(flags, str) else list(flags)
+    return any("pose_assumed" in str(f) for f in flags)
+
+
 def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=None) -> Figure:
     """The dead-reckoned path seen from above.
 
     Parameters
     ----------
     rows_or_result : OdometryResult or list of dict
-        Rows with ``x``, ``y`` (position), ``heading`` (degrees) and
-        ``flags``; ``x`` right and ``y`` down as in the first frame (so the
-        path looks like the mosaic).
+        Rows with ``x``, ``y`` (position), ``heading`` (degrees), ``flags``
+        and optionally ``status``; ``x`` right and ``y`` down as in the first
+        frame (so the path looks like the mosaic).
     path : str or Path, optional
         Where to save the PNG.
     unit : str
@@ -48,10 +64,12 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
 
     Notes
     -----
-    The start is a green circle, the end a black square; frames with flags
-    (a pair whose motion could not be measured or is doubtful) are red
-    crosses; a few arrows show the heading (0 = up in the first frame,
-    counter-clockwise positive as displayed).
+    The start is a green circle, the end a black square; frames whose pose
+    is assumed (status ``"assumed"`` or a ``pose_assumed`` flag: the motion
+    of their pair could not be measured and was carried on from the last
+    measured one) are hollow red circles, "pose assumed" in the legend;
+    other frames with flags are red crosses; a few arrows show the heading
+    (0 = up in the first frame, counter-clockwise positive as displayed).
 
     Returns
     -------
@@ -63,10 +81,14 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
     >>> from seahough.viz import plot_trajectory
     >>> rows = [{"x": 0.0, "y": 0.0, "heading": 0.0, "flags": []},
     ...         {"x": 3.0, "y": -4.0, "heading": 10.0, "flags": []},
-    ...         {"x": 6.0, "y": -8.0, "heading": None, "flags": ["lost"]}]
+    ...         {"x": 6.0, "y": -8.0, "heading": None, "flags": ["lost"]},
+    ...         {"x": 9.0, "y": -12.0, "heading": None, "status": "assumed",
+    ...          "flags": "no_match; pose_assumed: constant velocity since frame 1"}]
     >>> fig = plot_trajectory(rows, unit="m")   # path=...: also a PNG
     >>> fig.axes[0].get_title()
-    'dead-reckoned path: 3 frames, 10.0 m travelled, 1 flagged'
+    'dead-reckoned path: 4 frames, 15.0 m travelled, 2 flagged'
+    >>> [t.get_text() for t in fig.axes[0].get_legend().get_texts()][-3:]
+    ['flagged (1)', 'pose assumed (1)', 'heading']
     >>> tuple(int(v) for v in fig.get_size_inches() * fig.dpi)
     (900, 800)
     """
@@ -93,10 +115,14 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
         i0 = int(np.flatnonzero(ok)[0]); i1 = int(np.flatnonzero(ok)[-1])
         ax.plot(xs[i0], ys[i0], "o", ms=12, color="#1aa442", mec="black", label="start", zorder=4)
         ax.plot(xs[i1], ys[i1], "s", ms=11, color="black", label="end", zorder=4)
-        bad = flagged & ok
+        guessed = np.array([_assumed(r) for r in rows], bool) & ok
+        bad = flagged & ok & ~guessed
         if bad.any():
             ax.plot(xs[bad], ys[bad], "x", ms=11, mew=2.5, color="#e0001b",
                     label=f"flagged ({int(bad.sum())})", zorder=5)
+        if guessed.any():
+            ax.plot(xs[guessed], ys[guessed], "o", ms=11, mfc="white", mec="#e0001b", mew=2.2,
+                    label=f"pose assumed ({int(guessed.sum())})", zorder=5)
         hd = np.array([_num(r.get("heading")) for r in rows], float)
         sel = np.flatnonzero(ok & np.isfinite(hd))
         if sel.size:
