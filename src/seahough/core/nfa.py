@@ -55,36 +55,41 @@ DEPENDENCE = 2.5
 #: shape's straight side fits along its whole length (an L-shaped marker
 #: "found" in the corner of 20 of the 22 Sparus frames).
 BORDER = 3.0
+#: The chance of a match is never taken below this: the model samples
+#: every STRIDE-th position, and an isolated edge point's disc can hold
+#: none of them (half a sample of the 3 x 3 cells around).
+MIN_CHANCE = 0.5 / (9 * (CELL // STRIDE) ** 2)
 #: log10 NFA never goes below this (the float stays representable).
 MIN_LOG10_NFA = -300.0
 
 
 @dataclass
 class Background:
-    """Where chance matches are likely in one image: for each cell and
-    direction bin, the share of the pixel positions (smoothed over the
-    3 x 3 cells around) that lie within the match radius of an edge point
-    of that direction, as a cumulative over the bins.
+    """Where chance matches are likely in one image.
 
-    ``cum[cy, cx, j]`` sums the first ``j`` bins; the bins are about twice
-    the direction tolerance wide, so that one tolerance window spans about
-    one bin.
+    ``cover[cy, cx, b]``: for cell (cx, cy) and direction ``b`` (the centre
+    of the ``b``-th of ``nbins`` equal bins of [0, 2 pi)), the share of the
+    positions of the 3 x 3 cells around that lie within the match radius of
+    an edge point whose direction is within the tolerance of ``b``: the
+    chance that a point placed there at random, wanting that direction,
+    finds a match. Between bin centres it is interpolated.
     """
 
-    cum: np.ndarray       # (gy, gx, nbins + 1) float64
+    cover: np.ndarray     # (gy, gx, nbins) float64
     cell: int
     radius: float
     origin: tuple = (0, 0)  # the top-left pixel (x, y) of cell (0, 0)
 
 
 def n_direction_bins(tol: float) -> int:
-    """Direction bins of the background model for a tolerance of ``tol``
-    radians: each about ``2 tol`` wide (12 for 15 degrees).
+    """Directions of the background model for a tolerance of ``tol``
+    radians: about one tolerance apart (24 for 15 degrees), so that the
+    chance varies little between two of them.
 
     >>> n_direction_bins(math.radians(15))
-    12
+    24
     """
-    return int(np.clip(round(math.pi / max(tol, 1e-6)), 4, 32))
+    return int(np.clip(round(2 * math.pi / max(tol, 1e-6)), 8, 32))
 
 
 def background(edges, radius: float, tol: float, box=None, index=None) -> Background:
@@ -92,8 +97,8 @@ def background(edges, radius: float, tol: float, box=None, index=None) -> Backgr
     (:class:`~.keypoints.EdgePoints`) for a match ``radius`` (px) and
     direction tolerance ``tol`` (radians), over ``box`` (x0, y0, x1, y1,
     end exclusive; default: the whole image). Points outside the box take
-    the model of its nearest cell.
-    ``index`` is the edge points' index map (made when not given).
+    the model of its nearest cell. ``index`` is the edge points' index map
+    (made when not given).
 
     Examples
     --------
@@ -101,9 +106,9 @@ def background(edges, radius: float, tol: float, box=None, index=None) -> Backgr
     >>> from seahough.core.preprocess import compute_gradients
     >>> img = np.zeros((64, 64), np.float32); img[:, 32:] = 200
     >>> bg = background(find_edge_points(compute_gradients(img), 50), 1.5, math.radians(15))
-    >>> bg.cum.shape
-    (8, 8, 13)
-    >>> float(bg.cum[:, 0, -1].max()), float(bg.cum[:, 4, -1].max()) > 0.1
+    >>> bg.cover.shape
+    (8, 8, 24)
+    >>> float(bg.cover[:, 0].max()), float(bg.cover[:, 4, 0].max()) > 0.1   # (the edge: direction 0)
     (0.0, True)
     """
     h, w = edges.shape
@@ -113,47 +118,43 @@ def background(edges, radius: float, tol: float, box=None, index=None) -> Backgr
     nb = n_direction_bins(tol)
     if index is None:
         index = edges.index_map()
-    cum = K.chance_coverage(edges.x, edges.y, edges.angle, index, x0, y0, y1 - y0, x1 - x0,
-                            float(radius), nb, CELL, STRIDE)
-    return Background(cum, CELL, float(radius), (x0, y0))
+    cover = K.chance_coverage(edges.x, edges.y, edges.angle, index, x0, y0, y1 - y0, x1 - x0,
+                              float(radius), float(tol), nb, CELL, STRIDE)
+    return Background(cover, CELL, float(radius), (x0, y0))
 
 
-def chance(bg: Background, x, y, direction, tol: float, either: bool) -> np.ndarray:
+def chance(bg: Background, x, y, direction, either: bool) -> np.ndarray:
     """Probability that a point at (x, y) wanting an edge of ``direction``
-    (radians, within ``tol``) finds one within the background's radius by
-    chance.
+    (radians) finds one within the background's radius and tolerance by
+    chance (``either``: of that direction or the opposite one; their sum,
+    an upper bound).
 
     Examples
     --------
-    >>> bg = Background(np.linspace(0, 1.2, 13)[None, None, :].repeat(2, 0).repeat(2, 1), 8, 1.5)
+    >>> cover = np.zeros((2, 2, 24)); cover[..., 0], cover[..., 1] = 0.1, 0.3
+    >>> bg = Background(cover, 8, 1.5)
+    >>> half = math.pi / 24                                  # the centre of bin 0
     >>> [round(float(v), 3) for v in chance(bg, np.array([3.0, 3.0]), np.array([3.0, 3.0]),
-    ...                                     np.array([0.0, 1.0]), math.radians(15), False)]
-    [0.1, 0.1]
+    ...                                     np.array([half, 2 * half]), False)]
+    [0.1, 0.2]
     """
-    gy, gx, nb1 = bg.cum.shape
-    nb = nb1 - 1
+    gy, gx, nb = bg.cover.shape
     cx = np.clip(((np.asarray(x) - bg.origin[0]) // bg.cell).astype(np.int64), 0, gx - 1)
     cy = np.clip(((np.asarray(y) - bg.origin[1]) // bg.cell).astype(np.int64), 0, gy - 1)
-    cum = bg.cum[cy, cx]                      # (n, nb + 1)
-    total = cum[:, -1]
-    rows = np.arange(cum.shape[0])
+    cover = bg.cover[cy, cx]                  # (n, nb)
+    rows = np.arange(cover.shape[0])
 
-    def at(phi):  # cumulative coverage from direction 0 to phi (any real phi), in bins
-        u = phi * (nb / (2 * math.pi))
-        turns = np.floor(u / nb)
-        u = u - turns * nb
-        j = np.minimum(u.astype(np.int64), nb - 1)
-        frac = u - j
-        return turns * total + cum[rows, j] + frac * (cum[rows, j + 1] - cum[rows, j])
+    def at(phi):  # linear between the two nearest bin centres
+        u = np.asarray(phi, np.float64) * (nb / (2 * math.pi)) - 0.5
+        j = np.floor(u)
+        f = u - j
+        j0 = j.astype(np.int64) % nb
+        return (1.0 - f) * cover[rows, j0] + f * cover[rows, (j0 + 1) % nb]
 
-    # a window 2 tol wide spans about one bin: its coverage is the bins'
-    # coverage in proportion to the overlap, rescaled to the window's width
-    width = (2.0 * tol) * nb / (2 * math.pi)
     d = np.asarray(direction, np.float64)
-    p = np.clip((at(d + tol) - at(d - tol)) / max(width, 1e-9), 0.0, 1.0) * min(width, 1.0)
+    p = at(d)
     if either:
-        q = np.clip((at(d + math.pi + tol) - at(d + math.pi - tol)) / max(width, 1e-9), 0.0, 1.0)
-        p = 1.0 - (1.0 - p) * (1.0 - q * min(width, 1.0))
+        p = np.minimum(1.0, p + at(d + math.pi))
     return p
 
 
@@ -190,15 +191,16 @@ def log10_binom_tail(k: float, n: float, p: float) -> float:
 
 def log10_tests(region_area: float, radius: float, scale_range, angle_range,
                 period: float = 360.0, line_span: float | None = None,
-                line_width: float = 0.0) -> float:
+                line_width: float = 0.0, line_length: float = 0.0) -> float:
     """log10 of the number of distinct poses a search tries: positions
     (working pixels of the region where the origin may lie) x rotations x
     scales, each step moving the pattern's points by about a pixel
     (``radius``: the pattern's radius in working pixels at scale 1). For a
     line (``line_span``: the region's diagonal) the positions along it are
-    one answer: its distinct positions are its offsets across it, and its
-    distinct scales those that move its borders (``line_width`` apart) by a
-    pixel.
+    one answer: its distinct positions are its offsets across it (times the
+    places along it of a pattern ``line_length`` long, shorter than the
+    region), and its distinct scales those that move its borders
+    (``line_width`` apart) by a pixel.
 
     Examples
     --------
@@ -212,7 +214,8 @@ def log10_tests(region_area: float, radius: float, scale_range, angle_range,
     r = max(float(radius), 1.0)
     n_angle = max(1.0, math.radians(min(a1 - a0, period)) * r * s1)
     n_scale = max(1.0, (r if line_span is None else 0.5 * line_width) * (s1 - s0))
-    positions = region_area if line_span is None else line_span
+    positions = region_area if line_span is None else (
+        line_span * max(1.0, line_span / max(line_length * s0, 1.0)))
     return math.log10(max(positions, 1.0)) + math.log10(n_angle) + math.log10(n_scale)
 
 
@@ -220,7 +223,7 @@ def log10_tests(region_area: float, radius: float, scale_range, angle_range,
 class Evidence:
     """The a-contrario counts of one pose."""
 
-    n: int          # distinct pixels the pattern points fall on, inside the image
+    n: int          # image edge points the pattern's edges cover, inside the image
     k: int          # distinct image edge points they match
     p: float        # mean chance of a match at those points
     log10_nfa: float
@@ -237,9 +240,11 @@ def evidence(pose, vx, vy, vang, edges, index, bg: Background, log_tests: float,
     other, at scale 1) against an image's edge points.
 
     ``n`` counts the image edge points the pattern's edges would cover at
-    this pose: a thinned edge has one point per ``max(|cos a|, |sin a|)``
-    pixel of its length (``a``: its direction), and points closer than that
-    share one; ``k`` the distinct edge points matched (at most ``n``).
+    this pose: a thinned edge is 4-connected, with ``|cos a| + |sin a|``
+    points a pixel of its length (``a``: its direction), and pattern points
+    closer than that share one; ``k`` the distinct edge points matched (at
+    most ``n``). The binomial is taken over independent observations: one
+    per :data:`DEPENDENCE` edge points at most, ``k`` in proportion.
     """
     ids, _ = K.match_points(vx, vy, vang, float(pose.a), float(pose.b), float(pose.tx),
                             float(pose.ty), edges.x, edges.y, edges.angle, index,
@@ -247,13 +252,15 @@ def evidence(pose, vx, vy, vang, edges, index, bg: Background, log_tests: float,
     h, w = index.shape
     step = spacing * math.hypot(pose.a, pose.b)  # between neighbouring points, image px
     n_eff, m_eff, k, p = K.evidence_counts(
-        vx, vy, vang, float(pose.a), float(pose.b), float(pose.tx), float(pose.ty), ids, bg.cum,
-        int(bg.origin[0]), int(bg.origin[1]), int(bg.cell), int(h), int(w), float(BORDER),
-        float(tol), bool(either), float(step), float(DEPENDENCE))
+        vx, vy, vang, float(pose.a), float(pose.b), float(pose.tx), float(pose.ty), ids,
+        bg.cover, int(bg.origin[0]), int(bg.origin[1]), int(bg.cell), int(h), int(w),
+        float(BORDER), bool(either), float(step), float(DEPENDENCE))
     n = int(round(n_eff))
-    if n == 0:
-        return Evidence(0, 0, 0.0, log_tests)
+    if n == 0 or m_eff < 0.5:
+        return Evidence(n, 0, 0.0, log_tests)
     k = min(int(k), n)
-    # independent observations: one per DEPENDENCE px of edge at most
-    tail = log10_binom_tail(k * m_eff / n_eff, m_eff, p)
+    # independent observations: one per DEPENDENCE edge points at most
+    n_obs = int(round(m_eff))
+    k_obs = min(int(round(min(k, n_eff) * m_eff / n_eff)), n_obs)
+    tail = log10_binom_tail(k_obs, n_obs, max(p, MIN_CHANCE))
     return Evidence(n, k, p, max(log_tests + tail, MIN_LOG10_NFA))

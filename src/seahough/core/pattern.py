@@ -25,10 +25,11 @@ from .features import extract_features
 from ..io.images import to_gray
 from .keypoints import edge_points_near
 from .preprocess import choose_factor, compute_gradients
+from . import shapes as _shapes
 
 POLARITIES = ("bright", "dark", "either")
 #: What a pattern can be (``Pattern.kind``).
-KINDS = ("image", "frame", "rectangle", "line", "polygon", "circle", "ring")
+KINDS = ("image", "frame", "rectangle", "line", "polygon", "circle", "ring", "polyline")
 #: Primitive shapes are drawn at most this many pixels a side.
 MAX_SHAPE_SIDE = 8192
 #: ... and at least this many pixels across: anything thinner is drawn alike
@@ -99,7 +100,7 @@ class Pattern:
 
     Build it with one of the constructors: :meth:`from_image`,
     :meth:`from_frame`, :meth:`rectangle`, :meth:`line`, :meth:`polygon`,
-    :meth:`circle`. Then hand it to :class:`~seahough.Detector`.
+    :meth:`circle`, :meth:`polyline`. Then hand it to :class:`~seahough.Detector`.
 
     Attributes
     ----------
@@ -117,7 +118,7 @@ class Pattern:
         Polylines (pattern-image pixels) drawn to show a detection.
     kind : str
         ``"image"``, ``"frame"``, ``"rectangle"``, ``"line"``, ``"polygon"``,
-        ``"circle"`` or ``"ring"``.
+        ``"circle"``, ``"ring"`` or ``"polyline"``.
 
     Examples
     --------
@@ -323,6 +324,8 @@ class Pattern:
         p.line_length, p.line_width = L, W
         return p
 
+    polyline = classmethod(_shapes.polyline)
+
     # ------------------------------------------------------------ description
     def _outline_from_mask(self):
         h, w = self._gray.shape
@@ -506,6 +509,8 @@ class Pattern:
             arrays["edge_mask"] = self._edge_mask
         if self.is_line:
             arrays["line"] = np.array([self.line_length, self.line_width], float)
+        if self.kind == "polyline":   # its width, then its centre line
+            arrays["polyline"] = np.r_[self.polyline_width, self.polyline_points.ravel()]
         try:
             with open(path, "wb") as f:
                 np.savez_compressed(f, **arrays)
@@ -550,6 +555,9 @@ class Pattern:
                      outline, bool(data["closed"]), data.get("edge_mask"), config)
             if kind == "line":
                 p.line_length, p.line_width = (float(v) for v in data["line"])
+            if kind == "polyline":
+                v = np.asarray(data["polyline"], float)
+                p.polyline_width, p.polyline_points = float(v[0]), v[1:].reshape(-1, 2)
         except (KeyError, TypeError, ValueError, IndexError, zipfile.BadZipFile,
                 zlib.error, EOFError, OSError) as e:
             raise PatternError(f"{bad} ({e})") from None

@@ -287,8 +287,11 @@ def judge(ctx: SearchContext, c: Candidate) -> None:
     area = (b.nx - 1) * (b.ny - 1) * b.step * b.step
     period = 180.0 if ctx.pattern.is_line else 360.0
     span = math.hypot((b.nx - 1) * b.step, (b.ny - 1) * b.step) if ctx.pattern.is_line else None
-    width = ctx.pattern.line_width * ctx.factor if ctx.pattern.is_line else 0.0
-    tests = log10_tests(area, pf.radius, ctx.scale_range, ctx.angle_range, period, span, width)
+    line = ctx.pattern.is_line
+    width = ctx.pattern.line_width * ctx.factor if line else 0.0
+    length = ctx.pattern.line_length * ctx.factor if line else 0.0
+    tests = log10_tests(area, pf.radius, ctx.scale_range, ctx.angle_range, period, span, width,
+                        length)
     c.evidence = evidence(c.fit.pose, pf.vx, pf.vy, pf.vangle, feats.edges, feats.index,
                           bg, tests, tol=tol, either=ctx.pattern.either, spacing=pf.spacing)
 

@@ -290,7 +290,7 @@ def icp(px, py, pang, a, b, tx, ty, ex, ey, eang, enx, eny, index, radii, iterat
 
 
 @njit(cache=CACHE, nogil=True)
-def chance_coverage(ex, ey, eang, index, ox, oy, h, w, radius, nbins, cell, stride):
+def chance_coverage(ex, ey, eang, index, ox, oy, h, w, radius, tol, nbins, cell, stride):
     """The a-contrario background model (:mod:`seahough.core.nfa`): how
     much of each place a chance match can hit, in the box of ``h`` x ``w``
     pixels whose top-left pixel is (ox, oy) (coordinates below are relative
@@ -298,11 +298,13 @@ def chance_coverage(ex, ey, eang, index, ox, oy, h, w, radius, nbins, cell, stri
     -1: none), so that the cost follows the box, not the image.
 
     Sample positions are the pixel centres whose coordinates are multiples
-    of ``stride``. For each cell of ``cell`` x ``cell`` pixels (a multiple
-    of ``stride``) and each of ``nbins`` direction bins (<= 32), the share
-    of the sample positions of the 3 x 3 cells around it that lie within
-    ``radius`` of an edge point whose direction is in that bin. Returned as
-    a cumulative over the bins: ``(gy, gx, nbins + 1)``, ``[..., 0] = 0``.
+    of ``stride``. The ``nbins`` directions (<= 32) are the centres of as
+    many equal bins of [0, 2 pi). For each cell of ``cell`` x ``cell``
+    pixels (a multiple of ``stride``) and each direction, the share of the
+    sample positions of the 3 x 3 cells around it that lie within ``radius``
+    of an edge point whose direction is within ``tol`` of it: the chance
+    that a point placed there at random, wanting that direction, finds a
+    match. Returned as ``(gy, gx, nbins)``.
     """
     gy = (h + cell - 1) // cell
     gx = (w + cell - 1) // cell
@@ -321,12 +323,16 @@ def chance_coverage(ex, ey, eang, index, ox, oy, h, w, radius, nbins, cell, stri
             j = index[py, px]
             if j < 0:
                 continue
-            b = int(eang[j] * scale)
-            if b >= nbins:
-                b = nbins - 1
+            # the directions within tol of this edge's
+            b0 = int(math.ceil((eang[j] - tol) * scale - 0.5))
+            b1 = int(math.floor((eang[j] + tol) * scale - 0.5))
+            bit = np.uint32(0)
+            for bb in range(b0, b1 + 1):
+                bit |= np.uint32(1) << np.uint32(bb % nbins)
+            if bit == 0:
+                continue
             x = ex[j] - ox
             y = ey[j] - oy
-            bit = np.uint32(1) << np.uint32(b)
             # the sample rows and columns within the radius
             y0 = max(int(math.ceil((y - radius) * inv)), 0)
             y1 = min(int(math.floor((y + radius) * inv)), sh - 1)
@@ -338,9 +344,13 @@ def chance_coverage(ex, ey, eang, index, ox, oy, h, w, radius, nbins, cell, stri
                     dx = sx * stride - x
                     if dx * dx + dy * dy <= r2:
                         mm = mask[sy, sx]
-                        if not (mm & bit):
-                            mask[sy, sx] = mm | bit
-                            hits[sy // per, sx // per, b] += 1.0
+                        new = bit & ~mm
+                        if new:
+                            mask[sy, sx] = mm | new
+                            for bb in range(b0, b1 + 1):  # (this edge's directions only)
+                                q = bb % nbins
+                                if new & (np.uint32(1) << np.uint32(q)):
+                                    hits[sy // per, sx // per, q] += 1.0
     # sample positions per cell (the last row and column may be cut)
     ny = np.empty(gy)
     for i in range(gy):
@@ -348,7 +358,7 @@ def chance_coverage(ex, ey, eang, index, ox, oy, h, w, radius, nbins, cell, stri
     nx = np.empty(gx)
     for i in range(gx):
         nx[i] = min(per, sw - i * per)
-    out = np.zeros((gy, gx, nbins + 1), np.float64)
+    out = np.zeros((gy, gx, nbins), np.float64)
     for cy in range(gy):
         for cx in range(gx):
             area = 0.0
@@ -356,25 +366,25 @@ def chance_coverage(ex, ey, eang, index, ox, oy, h, w, radius, nbins, cell, stri
                 for xx in range(max(cx - 1, 0), min(cx + 2, gx)):
                     area += ny[yy] * nx[xx]
                     for b in range(nbins):
-                        out[cy, cx, b + 1] += hits[yy, xx, b]
+                        out[cy, cx, b] += hits[yy, xx, b]
             for b in range(nbins):
-                out[cy, cx, b + 1] = out[cy, cx, b] + out[cy, cx, b + 1] / area
+                out[cy, cx, b] /= area
     return out
 
 
 @njit(cache=CACHE, nogil=True, inline="always")
-def _coverage_at(cum, cy, cx, phi, nb):
-    """Cumulative coverage of cell (cx, cy) from direction 0 to ``phi`` (any real)."""
-    u = phi * nb / TWO_PI
-    turns = math.floor(u / nb)
-    u -= turns * nb
-    j = min(int(u), nb - 1)
-    frac = u - j
-    return turns * cum[cy, cx, nb] + cum[cy, cx, j] + frac * (cum[cy, cx, j + 1] - cum[cy, cx, j])
+def _chance_at(cover, cy, cx, phi, nb):
+    """Chance of a match in cell (cx, cy) for a point wanting direction
+    ``phi`` (any real): linear between the two nearest bin centres."""
+    u = phi * nb / TWO_PI - 0.5
+    j = math.floor(u)
+    f = u - j
+    j0 = int(j) % nb
+    return (1.0 - f) * cover[cy, cx, j0] + f * cover[cy, cx, (j0 + 1) % nb]
 
 
 @njit(cache=CACHE, nogil=True)
-def evidence_counts(px, py, pang, a, b, tx, ty, ids, cum, ox, oy, cell, h, w, border, tol,
+def evidence_counts(px, py, pang, a, b, tx, ty, ids, cover, ox, oy, cell, h, w, border,
                     either, step, ell):
     """The a-contrario counts of a pose (:func:`seahough.core.nfa.evidence`):
     ``(n, m, k, p)``. Pattern points farther than ``border`` from the edges
@@ -384,13 +394,9 @@ def evidence_counts(px, py, pang, a, b, tx, ty, ids, cum, ox, oy, cell, h, w, bo
     a pixel of its length), ``m`` the independent observations it makes
     (one per ``ell`` edge points at most), ``k`` the distinct edge points
     matched (``ids``, -1: none), ``p`` the mean chance of a match at the
-    points (``cum``: the background model, its cell (0, 0) at pixel (ox, oy))."""
-    gy, gx, nb1 = cum.shape
-    nb = nb1 - 1
+    points (``cover``: the background model, its cell (0, 0) at pixel (ox, oy))."""
+    gy, gx, nb = cover.shape
     phi = math.atan2(b, a)
-    width = 2.0 * tol * nb / TWO_PI
-    inv_w = 1.0 / max(width, 1e-9)
-    scale_w = min(width, 1.0)
     n_eff = 0.0
     m_eff = 0.0
     psum = 0.0
@@ -404,18 +410,14 @@ def evidence_counts(px, py, pang, a, b, tx, ty, ids, cum, ox, oy, cell, h, w, bo
             continue
         want = pang[i] - phi
         want -= TWO_PI * math.floor(want / TWO_PI)
-        cover = step * max(abs(math.cos(want)), abs(math.sin(want)))
-        n_eff += min(1.0, cover)
-        m_eff += min(1.0, cover / ell)
+        covers = step * (abs(math.cos(want)) + abs(math.sin(want)))
+        n_eff += min(1.0, covers)
+        m_eff += min(1.0, covers / ell)
         cx = min(max(int(math.floor((x - ox) / cell)), 0), gx - 1)
         cy = min(max(int(math.floor((y - oy) / cell)), 0), gy - 1)
-        p = (_coverage_at(cum, cy, cx, want + tol, nb) - _coverage_at(cum, cy, cx, want - tol, nb))
-        p = min(max(p * inv_w, 0.0), 1.0) * scale_w
+        p = _chance_at(cover, cy, cx, want, nb)
         if either:
-            q = (_coverage_at(cum, cy, cx, want + math.pi + tol, nb)
-                 - _coverage_at(cum, cy, cx, want + math.pi - tol, nb))
-            q = min(max(q * inv_w, 0.0), 1.0) * scale_w
-            p = 1.0 - (1.0 - p) * (1.0 - q)
+            p = min(1.0, p + _chance_at(cover, cy, cx, want + math.pi, nb))
         psum += p
         cnt += 1
         if ids[i] >= 0:

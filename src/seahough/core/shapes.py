@@ -1,0 +1,168 @@
+"""Open shapes: a polyline of strips (a gate frame, a chevron), drawn as
+:class:`~seahough.Pattern` draws its other primitive shapes.
+
+A strip ``width`` px wide runs along every segment of the polyline; the
+segments meet in mitred corners (square for a right angle, bevelled when
+the mitre would be longer than :data:`MITRE_LIMIT` widths, as SVG does) and
+the two ends are cut square at the first and last points. The union of the
+strips is drawn on a finer raster: traced, it gives the pattern's outline
+(closed boundary polygons); averaged down, each pixel's level (30 to 230,
+as the other shapes) by the area of it the strips cover.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+
+from ..errors import ParameterError
+
+#: A corner's mitre longer than this many strip widths is bevelled (SVG's default).
+MITRE_LIMIT = 4.0
+#: The strips are traced on a raster this many times finer than the pattern's
+#: pixels (fewer for a large shape: at most _MAX_FINE px a side).
+_FINE = 8
+_MAX_FINE = 8192
+
+
+def _points(points) -> np.ndarray:
+    """The polyline's points as an (n, 2) float array, consecutive repeats
+    dropped (a ParameterError naming ``points`` when there is no polyline)."""
+    try:
+        pts = np.asarray(points, float).reshape(-1, 2)
+    except (TypeError, ValueError):
+        raise ParameterError(f"points={points!r}: expected (x, y) pairs") from None
+    if not np.isfinite(pts).all():
+        raise ParameterError("points: the polyline's coordinates must be finite")
+    if pts.shape[0] >= 2:
+        step = np.hypot(*np.diff(pts, axis=0).T)
+        pts = pts[np.r_[True, step > 1e-9]]
+    if pts.shape[0] < 2:
+        raise ParameterError("points: a polyline needs at least 2 distinct (x, y) points")
+    return pts
+
+
+def strip_polygons(points, width: float, mitre_limit: float = MITRE_LIMIT) -> list[np.ndarray]:
+    """The polygons whose union is the strip: one rectangle per segment and
+    one corner piece (mitre, or bevel beyond ``mitre_limit``) per turn.
+
+    Examples
+    --------
+    A right-angled bend of a strip 2 px wide: two rectangles, and the square
+    corner piece that fills the outside of the bend.
+
+    >>> right, down, corner = strip_polygons([(0, 0), (10, 0), (10, 10)], 2)
+    >>> right.tolist(), corner.tolist()
+    ([[0.0, 1.0], [10.0, 1.0], [10.0, -1.0], [0.0, -1.0]], [[10.0, 0.0], [10.0, -1.0], [11.0, -1.0], [11.0, 0.0]])
+    """
+    pts = np.asarray(points, float)
+    h = 0.5 * float(width)
+    d = np.diff(pts, axis=0)
+    d /= np.hypot(d[:, 0], d[:, 1])[:, None]
+    n = np.stack([-d[:, 1], d[:, 0]], 1)             # each segment's normal
+    polys = [np.array([a + h * m, b + h * m, b - h * m, a - h * m])
+             for a, b, m in zip(pts[:-1], pts[1:], n)]
+    for i in range(1, len(pts) - 1):
+        v, na, nb = pts[i], n[i - 1], n[i]
+        turn = float(np.dot(d[i], na))                # > 0: turns towards +na
+        if abs(turn) < 1e-12:
+            continue                                  # straight on, or straight back
+        s = -math.copysign(h, turn)                   # the outer side's offset
+        c = float(np.dot(na, nb))
+        corner = [v, v + s * na]
+        if 1.0 + c > 1e-12 and math.sqrt(2.0 / (1.0 + c)) <= mitre_limit:
+            corner.append(v + s * (na + nb) / (1.0 + c))   # the outer borders meet here
+        corner.append(v + s * nb)
+        polys.append(np.array(corner))
+    return polys
+
+
+def _draw(polys, shape, fine: int):
+    """The union of ``polys`` (canvas pixels) drawn on a raster ``fine``
+    times finer: its coverage of each canvas pixel (0-1, the exact area
+    within 1 / fine px a side), and its outer boundaries and holes traced
+    as polygons in canvas pixels."""
+    h, w = shape
+    raster = np.zeros((h * fine, w * fine), np.uint8)
+    # canvas pixel i holds fine pixels fine * i ... fine * i + fine - 1, so x
+    # is drawn at fine * (x + 0.5) - 0.5 (8 bits of sub-pixel), and a traced
+    # fine pixel j is x = j / fine - 0.5: both borders of a strip within 1 / fine
+    for p in polys:
+        q = np.round(((np.asarray(p) + 0.5) * fine - 0.5) * 256).astype(np.int32)
+        cv2.fillPoly(raster, [q.reshape(-1, 1, 2)], 255, lineType=cv2.LINE_8, shift=8)
+    cs, hier = cv2.findContours(raster, cv2.RETR_CCOMP, cv2.CHAIN_APPROX_SIMPLE)
+    outer, holes = [], []
+    for c, (_, _, _, parent) in zip(cs, hier[0] if hier is not None else []):
+        c = cv2.approxPolyDP(c, 1.5, True).reshape(-1, 2)   # (straightens the steps)
+        if len(c) < 3:
+            continue
+        (outer if parent < 0 else holes).append(c / fine - 0.5)
+    cover = cv2.resize(raster.astype(np.float32) / 255.0, (w, h), interpolation=cv2.INTER_AREA)
+    return cover, outer, holes
+
+
+def polyline(cls, points, width, *, polarity="bright", margin=6.0):
+    """An open polyline of strips ``width`` px wide: a gate frame (two posts
+    and a bar), a chevron, a bent bracket.
+
+    Parameters
+    ----------
+    points : sequence of (x, y)
+        The strips' centre line, at least 2 points (any units of pixels; only
+        their shape matters).
+    width : float
+        The strips' width in pixels (at least 1).
+    polarity : {"bright", "dark", "either"}
+        ``"bright"``: bright strips on a darker background.
+    margin : float
+        Background pixels around the shape in the pattern image.
+
+    Returns
+    -------
+    Pattern
+        ``kind="polyline"``. Its edges are the strips' borders: both sides of
+        every strip and the two square ends. Corners are mitred (square for a
+        right angle; bevelled beyond a mitre :data:`MITRE_LIMIT` widths long).
+        The origin (what ``Detection.x, y`` report) is the centre of the
+        points' bounding box; ``polyline_points`` holds the centre line and
+        ``polyline_width`` the width, in pattern-image pixels. The outline
+        is the strips' boundary (closed polygons), drawn around the object.
+
+    Examples
+    --------
+    >>> from seahough import Pattern
+    >>> gate = Pattern.polyline([(0, 80), (0, 0), (60, 0), (60, 80)], 6)  # posts and bar
+    >>> gate.kind, gate.image.shape, gate.origin
+    ('polyline', (96, 79), (39.0, 49.0))
+    >>> gate.polyline_points[0].tolist(), int(gate.image[49, 39]), int(gate.image[49, 9])
+    ([9.0, 89.0], 30, 230)
+    """
+    from .pattern import _check_polarity, _check_positive
+
+    pts = _points(points)
+    _check_positive(width=width)
+    W = float(width)
+    if float(np.hypot(*np.diff(pts, axis=0).T).sum()) < 1.0:
+        raise ParameterError("points: the polyline must be at least 1 px long")
+    _check_polarity(polarity)
+    polys = strip_polygons(pts, W)
+    allv = np.vstack(polys)
+    lo = allv.min(axis=0)
+    w, h = allv.max(axis=0) - lo
+    img, m = cls._canvas(w, h, margin)
+    shift = m - lo
+    polys = [p + shift for p in polys]
+    fine = max(1, min(_FINE, _MAX_FINE // max(img.shape)))
+    cover, outer, holes = _draw(polys, img.shape, fine)
+    # drawn by its area on each pixel: cv2's anti-aliased fill (the other
+    # shapes') widens a shape by about 0.7 px a side, 25 % of a 6 px strip,
+    # and a chevron drawn so was found 2 % too small
+    img = np.round(30.0 + 200.0 * cover).astype(np.uint8)
+    pts = pts + shift
+    origin = tuple(float(v) for v in 0.5 * (pts.min(axis=0) + pts.max(axis=0)))
+    p = cls(img, None, origin, polarity=polarity, kind="polyline", outline=outer + holes,
+            closed=True)
+    p.polyline_points, p.polyline_width = pts, W
+    return p
