@@ -125,15 +125,19 @@ def test_nfa_grows_with_clutter_at_equal_score():
     assert b.nfa > 100 * a.nfa
 
 
-def test_object_free_texture_is_not_found_at_the_default():
-    """Nothing in pure texture passes max_nfa=1 even with no score threshold."""
+def test_object_free_texture_keeps_the_promise():
+    """Pure texture holds no rectangle: the search's best guesses have NFAs
+    of about 1 and more, and at most a few of 8 images give a detection at
+    max_nfa=1 (the promise: about one a image at most), none at 0.01."""
     p = seahough.Pattern.rectangle(60, 40)
-    for seed in range(3):
+    at_one = at_hundredth = 0
+    for seed in range(8):
         img = np.clip(_texture(10 + seed), 0, 255).astype(np.uint8)
         loose = seahough.Detector(p, min_score=0.0, max_nfa=math.inf).detect(img)
         assert loose, "the search returns its best guesses without a limit"
-        assert all(d.nfa > 1.0 for d in loose)
-        assert seahough.Detector(p, min_score=0.0).detect(img) == []
+        at_one += len(seahough.Detector(p, min_score=0.0).detect(img))
+        at_hundredth += len(seahough.Detector(p, min_score=0.0, max_nfa=0.01).detect(img))
+    assert at_one <= 4 and at_hundredth == 0
 
 
 @pytest.mark.parametrize("bad", [0, -1.0, "x", None, float("nan"), True])

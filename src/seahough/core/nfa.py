@@ -20,12 +20,13 @@ An answer with NFA <= 1 is one false alarm per image at most, on average
 share of the pixel positions near each place, per direction, that lie
 within the match radius of an edge point of that direction, measured over
 cells of :data:`CELL` working pixels and smoothed over 3 x 3 cells.
-Agreement counts distinct image edge points (two pattern points matching
-one edge point agree once) over distinct pixels. Neighbouring points along
-an edge do not agree independently (an edge that lies along the pattern's
-for one pixel does so for several): both counts are divided by
-:data:`DEPENDENCE`, a length in points measured on object-free real photos
-(``bench/bench_nfa.py``, ``docs/nfa.md``). Everything is computed in log10 to keep tiny tails.
+Agreement counts image edge points, each once however many pattern points
+fall on it (``n`` and ``k`` in the same unit: :func:`evidence`).
+Neighbouring points along an edge do not agree independently (an edge that
+lies along the pattern's for one pixel does so for several): one
+observation is counted per :data:`DEPENDENCE` edge points at most, a
+length measured on object-free real photos (``bench/bench_nfa.py``,
+``docs/nfa.md``). Everything is computed in log10 to keep tiny tails.
 """
 
 from __future__ import annotations
@@ -48,7 +49,7 @@ STRIDE = 2
 #: that along an edge share one, points farther apart (a frame's points,
 #: spread several pixels apart) are each one. Measured on the tuning part of
 #: bench/bench_nfa.py.
-DEPENDENCE = 2.5
+DEPENDENCE = 4.0
 #: Pattern points within this many working pixels of the image's border
 #: are not counted: the border holds the camera's own straight edges (dark
 #: lines that sensors and video decoders leave, a vignetted rim), which a
@@ -224,7 +225,7 @@ class Evidence:
     """The a-contrario counts of one pose."""
 
     n: int          # image edge points the pattern's edges cover, inside the image
-    k: int          # distinct image edge points they match
+    k: int          # of those, the ones that agree (found an edge point)
     p: float        # mean chance of a match at those points
     log10_nfa: float
 
@@ -242,8 +243,9 @@ def evidence(pose, vx, vy, vang, edges, index, bg: Background, log_tests: float,
     ``n`` counts the image edge points the pattern's edges would cover at
     this pose: a thinned edge is 4-connected, with ``|cos a| + |sin a|``
     points a pixel of its length (``a``: its direction), and pattern points
-    closer than that share one; ``k`` the distinct edge points matched (at
-    most ``n``). The binomial is taken over independent observations: one
+    closer than that share one; ``k`` the same count over the points that
+    found a match: the edge points that agree, each once however many
+    pattern points fall on it (at most ``n``). The binomial is taken over independent observations: one
     per :data:`DEPENDENCE` edge points at most, ``k`` in proportion.
     """
     ids, _ = K.match_points(vx, vy, vang, float(pose.a), float(pose.b), float(pose.tx),
@@ -258,9 +260,10 @@ def evidence(pose, vx, vy, vang, edges, index, bg: Background, log_tests: float,
     n = int(round(n_eff))
     if n == 0 or m_eff < 0.5:
         return Evidence(n, 0, 0.0, log_tests)
-    k = min(int(k), n)
+    k_eff = min(float(k), n_eff)
+    k = int(round(k_eff))
     # independent observations: one per DEPENDENCE edge points at most
     n_obs = int(round(m_eff))
-    k_obs = min(int(round(min(k, n_eff) * m_eff / n_eff)), n_obs)
+    k_obs = min(int(round(k_eff * m_eff / n_eff)), n_obs)
     tail = log10_binom_tail(k_obs, n_obs, max(p, MIN_CHANCE))
     return Evidence(n, k, p, max(log_tests + tail, MIN_LOG10_NFA))

@@ -390,19 +390,20 @@ def evidence_counts(px, py, pang, a, b, tx, ty, ids, cover, ox, oy, cell, h, w, 
     ``(n, m, k, p)``. Pattern points farther than ``border`` from the edges
     of an ``h`` x ``w`` image count; ``n`` sums, for each, the image edge
     points its stretch of edge covers (``step``: the distance between
-    neighbouring points, px; a thinned edge has ``max(|cos|, |sin|)`` points
-    a pixel of its length), ``m`` the independent observations it makes
-    (one per ``ell`` edge points at most), ``k`` the distinct edge points
-    matched (``ids``, -1: none), ``p`` the mean chance of a match at the
-    points (``cover``: the background model, its cell (0, 0) at pixel (ox, oy))."""
+    neighbouring points, px; a thinned edge is 4-connected: it has
+    ``|cos| + |sin|`` points a pixel of its length), ``m`` the independent
+    observations it makes (one per ``ell`` edge points at most), ``k`` the
+    same sum over the points that found a match (``ids``, -1: none): the
+    edge points that agree, each once however many pattern points fall on
+    it; ``p`` the mean chance of a match at the points (``cover``: the
+    background model, its cell (0, 0) at pixel (ox, oy))."""
     gy, gx, nb = cover.shape
     phi = math.atan2(b, a)
     n_eff = 0.0
     m_eff = 0.0
     psum = 0.0
     cnt = 0
-    buf = np.empty(px.shape[0], np.int64)
-    m = 0
+    k_eff = 0.0
     for i in range(px.shape[0]):
         x = tx + a * px[i] + b * py[i]
         y = ty - b * px[i] + a * py[i]
@@ -421,13 +422,5 @@ def evidence_counts(px, py, pang, a, b, tx, ty, ids, cover, ox, oy, cell, h, w, 
         psum += p
         cnt += 1
         if ids[i] >= 0:
-            buf[m] = ids[i]
-            m += 1
-    k = 0
-    if m > 0:
-        s = np.sort(buf[:m])
-        k = 1
-        for i in range(1, m):
-            if s[i] != s[i - 1]:
-                k += 1
-    return n_eff, m_eff, k, psum / cnt if cnt > 0 else 0.0
+            k_eff += min(1.0, covers)
+    return n_eff, m_eff, k_eff, psum / cnt if cnt > 0 else 0.0
