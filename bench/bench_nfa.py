@@ -334,7 +334,8 @@ def main(argv=None) -> int:
         print(fitted)
     table, _ = report(data, a.quick)
     share = data["judge_s"] / max(data["search_s"], 1e-9)
-    text = (f"Command: `{command()}` (the evidence is collected afresh when the cache file "
+    cmd = command() if a.cache is None else command().replace(str(a.cache), "EVIDENCE.json")
+    text = (f"Command: `{cmd}` (the evidence is collected afresh when the cache file "
             f"is absent)  \nDate: {time.strftime('%Y-%m-%d')}  \nMachine: {machine()}  \n"
             f"{fitted}DEPENDENCE = {N.DEPENDENCE:g}, CELL = {N.CELL} px. Split: see "
             "the docstring of bench/bench_nfa.py and docs/nfa.md.\n\n"

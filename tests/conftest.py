@@ -87,3 +87,16 @@ def seahough_command() -> Path:
                     "install the package into this environment (pip install -e .)",
                     pytrace=False)
     return exe
+
+
+def write_frames(frames, folder: Path) -> list:
+    """Frames written as ``f_000.png``, ``f_001.png``... into ``folder``
+    (made if needed); their paths as strings, in order."""
+    import cv2
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for i, f in enumerate(frames):
+        p = folder / f"f_{i:03d}.png"
+        cv2.imwrite(str(p), f)
+        paths.append(str(p))
+    return paths

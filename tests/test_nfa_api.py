@@ -23,6 +23,8 @@ from seahough.errors import ParameterError
 from seahough.motion import read_odometry_csv, run_odometry
 from seahough.motion import pair as P
 
+from conftest import write_frames
+
 from test_cli import assert_one_error_line, run
 
 SHAPE = (240, 320)
@@ -101,13 +103,7 @@ def test_search_pair_does_not_judge_the_nfa_unless_told(frame_pair):
 def _sequence_files(folder: Path, n=6, seed=2, step=12.0):
     frames, _ = sim.sequence(n_frames=n, frame_size=SHAPE, path="line", step=step, seed=seed,
                              source="procedural")
-    folder.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for i, f in enumerate(frames):
-        p = folder / f"f_{i:03d}.png"
-        cv2.imwrite(str(p), f)
-        paths.append(str(p))
-    return paths
+    return write_frames(frames, folder)
 
 
 def _csv(path):

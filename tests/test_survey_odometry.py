@@ -24,7 +24,7 @@ from seahough.motion import read_odometry_csv, run_odometry
 from seahough.motion.runfiles import RunFolder
 from seahough.motion.track import pose_columns
 
-from conftest import data_path
+from conftest import data_path, write_frames
 
 distributed = pytest.importorskip("distributed")
 from seahough.survey.odometry import odometry as survey_odometry  # noqa: E402  (needs Dask)
@@ -46,13 +46,7 @@ def _frames(folder: Path, n, path="turn", seed=0, scene_seed=None, step=12.0):
     PNG files; their truth (cumulative matrices)."""
     frames, mats = S.sequence(None, n_frames=n, frame_size=SHAPE, path=path, step=step,
                               seed=seed, source="procedural")
-    folder.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for i, f in enumerate(frames):
-        p = folder / f"f_{i:03d}.png"
-        cv2.imwrite(str(p), f)
-        paths.append(str(p))
-    return paths, mats
+    return write_frames(frames, folder), mats
 
 
 def _true_track(mats):
