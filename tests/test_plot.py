@@ -555,3 +555,139 @@ def test_pictures_do_not_use_pyplot():
             "print('matplotlib.pyplot' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False", out.stdout + out.stderr
+
+
+# ------------------------------------------------------- overlays at native size
+def _checkerboard(h, w):
+    """One-pixel squares of 20 and 220: kept only when drawn pixel for pixel."""
+    return (np.indices((h, w)).sum(0) % 2 * 200 + 20).astype(np.uint8)
+
+
+def _image_area(fig):
+    """``(x0, y0, width, height)`` in whole PNG px of the image's axes."""
+    bb = fig.axes[0].get_window_extent()
+    return (int(round(bb.x0)), int(round(fig.bbox.height - bb.y1)), int(round(bb.width)),
+            int(round(bb.height)))
+
+
+def test_overlay_at_native_size_is_drawn_pixel_for_pixel(tmp_path):
+    img = _checkerboard(1200, 1600)
+    fig = plot.plot_detections(img, [], tmp_path / "native.png", max_width=0)
+    im = read_png(tmp_path / "native.png")
+    assert (im.shape[1], im.shape[0]) == plot.detections_size(img.shape, max_width=0) \
+        == (1700, 1300)
+    x0, y0, iw, ih = _image_area(fig)
+    assert iw >= 1600 and ih >= 1200
+    # every pixel of the photo is in the PNG: the checkerboard is intact, not a grey blur
+    patch = im[y0 + 20:y0 + 60, x0 + 20:x0 + 60, 0].astype(int)
+    assert np.abs(np.diff(patch, axis=1)).min() > 150, patch[:3, :6]
+    # "native" is 0; by default the same photo is drawn 900 px wide (blurred)
+    assert plot.detections_size(img.shape, max_width="native") == (1700, 1300)
+    fig = plot.plot_detections(img, [], tmp_path / "default.png")
+    im = read_png(tmp_path / "default.png")
+    assert (im.shape[1], im.shape[0]) == plot.detections_size(img.shape) == (1000, 775)
+    x0, y0, iw, ih = _image_area(fig)
+    assert iw == 900
+    patch = im[y0 + 20:y0 + 60, x0 + 20:x0 + 60, 0].astype(int)
+    assert np.abs(np.diff(patch, axis=1)).max() < 60
+
+
+def test_overlay_max_width_shrinks_a_wider_photo_and_never_enlarges(tmp_path):
+    img = _checkerboard(1200, 1600)
+    fig = plot.plot_detections(img, [], tmp_path / "1200.png", max_width=1200)
+    assert _image_area(fig)[2] == 1200 and fig.axes[0].images[0].get_array().shape == (900, 1200)
+    assert read_png(tmp_path / "1200.png").shape[:2] == (900 + 100, 1200 + 100)
+    # a photo narrower than max_width: drawn at its own width, not enlarged
+    assert plot.detections_size((480, 640), max_width=4000) == (740, 580)
+    assert plot.detections_size((480, 640), max_width=0) == (740, 580)
+    # a huge photo at native size: at most 8192 px on its longer side
+    assert plot.detections_size((5000, 20000), max_width=0) == (8292, 2148)
+    for bad in (-1, 2.5, "wide", True, float("nan")):
+        with pytest.raises(seahough.ParameterError, match="max_width="):
+            plot.plot_detections(img[:10, :10], [], max_width=bad)
+
+
+def test_detect_out_max_width_on_the_command_line(tmp_path):
+    import subprocess
+
+    from conftest import seahough_command
+
+    img = np.full((1200, 1600), 40, np.uint8)
+    cv2.rectangle(img, (500, 400), (1099, 799), 220, -1)
+    cv2.imwrite(str(tmp_path / "box.png"), img)
+
+    def run(*args):
+        return subprocess.run([str(seahough_command()), "detect", "rect:600,400",
+                               str(tmp_path / "box.png"), "--quiet", *map(str, args)],
+                              capture_output=True, text=True, timeout=180)
+
+    for opt, folder in (("0", "native"), ("native", "native2"), (None, "default")):
+        proc = run("--out", tmp_path / folder, *(("--max-width", opt) if opt else ()))
+        assert proc.returncode == 0, proc.stderr
+        im = cv2.imread(str(tmp_path / folder / "box_overlay.png"))
+        want = plot.detections_size(img.shape, max_width=0 if opt else None)
+        assert (im.shape[1], im.shape[0]) == want, (opt, im.shape)
+        assert want[0] >= (1700 if opt else 1000)
+    for bad in ("-3", "wide", "1.5"):
+        proc = run("--out", tmp_path / "bad", "--max-width", bad)
+        err = proc.stderr.strip().splitlines()
+        assert proc.returncode == 2 and len(err) == 1 and "--max-width" in err[0], proc.stderr
+        assert "Traceback" not in proc.stderr
+    proc = run("--max-width", "800")               # without --out: nothing to size
+    assert proc.returncode == 2 and "--out" in proc.stderr.strip().splitlines()[0]
+    assert not (tmp_path / "bad").exists()
+
+
+# ------------------------------------------- a line drawn along its visible part
+def _red_extent_along(fig, im, a_deg, cx, cy, band):
+    """The x range (image px) of the red pixels of the PNG ``im`` within
+    ``band`` image px of the line through (cx, cy) at ``a_deg``, leaving out
+    the labels' boxes."""
+    ax = fig.axes[0]
+    red = np.abs(im.astype(int) - [45, 45, 255]).max(axis=2) < 40
+    H = im.shape[0]
+    for t in ax.texts:                                   # the label (text and box)
+        bb = t.get_window_extent(fig.canvas.get_renderer())
+        p = t.get_bbox_patch()
+        if p is not None:
+            bb = bb.union([bb, p.get_window_extent(fig.canvas.get_renderer())])
+        red[int(H - bb.y1) - 2:int(H - bb.y0) + 3, int(bb.x0) - 2:int(bb.x1) + 3] = False
+    rows, cols = np.nonzero(red)
+    xy = ax.transData.inverted().transform(np.c_[cols + 0.5, H - rows - 0.5])
+    a = np.radians(a_deg)
+    dist = (xy[:, 0] - cx) * np.sin(a) + (xy[:, 1] - cy) * np.cos(a)
+    x = xy[np.abs(dist) <= band, 0]
+    assert x.size > 100
+    return np.percentile(x, 0.5), np.percentile(x, 99.5)
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_a_line_is_drawn_along_the_part_of_the_rope_the_image_shows(tmp_path, seed):
+    shape, a = (240, 320), 20.0
+    rope, truth = sim.rope_scene(shape, angle=a, offset=10.0, seed=seed, source="procedural")
+    # the same scene without the rope (same background and water), for its right half
+    empty, _ = sim.rope_scene(shape, angle=a, offset=1e4, seed=seed, source="procedural")
+    part = rope.copy()
+    part[:, 160:] = empty[:, 160:]
+    det = seahough.Detector(seahough.Pattern.line(120, 8), angle_range=(0, 180), max_results=1)
+    for scene, visible in ((part, (0, 160)), (rope, (0, 320))):
+        dets = det.detect(scene)
+        assert dets and dets[0].kind == "line"
+        assert abs(dets[0].line_angle - a) < 2
+        fig = plot.plot_detections(scene, dets, tmp_path / "rope.png")
+        im = read_png(tmp_path / "rope.png")
+        x0, x1 = _red_extent_along(fig, im, a, truth.x, truth.y, 8)
+        assert abs(x0 - visible[0]) < 32 and abs(x1 - visible[1]) < 32, (visible, x0, x1)
+
+
+def test_a_line_without_a_visible_extent_is_drawn_across_the_image(tmp_path):
+    # a detection on an image that does not show it (a flat grey): the old
+    # picture, both borders across the whole image
+    flat = np.full((240, 320), 90, np.uint8)
+    det = types.SimpleNamespace(kind="line", x=159.5, y=119.5, line_angle=20.0, line_offset=0.0,
+                                scale=1.0, angle=20.0, score=0.9, confidence=0.8,
+                                outline=[np.array([[120.0, 130.0], [200.0, 100.0]]) + o
+                                         for o in ((0, -3), (0, 3))])
+    fig = plot.plot_detections(flat, [det], tmp_path / "flat.png")
+    x0, x1 = _red_extent_along(fig, read_png(tmp_path / "flat.png"), 20.0, 159.5, 119.5, 8)
+    assert x0 < 10 and x1 > 310

@@ -63,7 +63,32 @@ def _picture_stem(name: str, out_dir, stems: dict) -> str | None:
     return f"{stem}_{k + 1}" if k else stem
 
 
-def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir):
+def _max_width_callback(ctx, param, value):
+    """A click callback checking ``--max-width``: a whole number of px >= 0,
+    or ``native`` (0: the photo's own width); None when not given.
+
+    >>> _max_width_callback(None, None, "1920"), _max_width_callback(None, None, "native")
+    (1920, 0)
+    >>> _max_width_callback(None, None, "-5")
+    Traceback (most recent call last):
+    click.exceptions.BadParameter: '-5': expected a whole number of px >= 0, or native
+    """
+    if value is None:
+        return None
+    text = value.strip().lower()
+    if text == "native":
+        return 0
+    try:
+        n = int(text)
+    except ValueError:
+        n = -1
+    if n < 0:
+        raise click.BadParameter(f"{value!r}: expected a whole number of px >= 0, or native")
+    return n
+
+
+def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir,
+                max_width=None):
     """Read and search one image, and write its pictures (``stem`` given):
     ``(result, (h, w), ms, written)``, or the SeahoughError that stopped
     reading or searching it. Runs in a worker thread: the kernels release
@@ -90,7 +115,7 @@ def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir):
         ov = out_dir / f"{stem}_overlay.png"
         ac = out_dir / f"{stem}_accumulator.png"
         ed = out_dir / f"{stem}_edges.png"
-        plot.plot_detections(img, dets, ov, pattern=pat, title=head)
+        plot.plot_detections(img, dets, ov, pattern=pat, title=head, max_width=max_width)
         plot.plot_accumulator(res.planes, dets, ac, title=f"{Path(name).name}: accumulator",
                               note=res.note)
         plot.plot_edges(img, res.features, ed, title=f"{Path(name).name}: what the detector sees")
@@ -98,21 +123,22 @@ def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir):
     return res, img.shape[:2], ms, written
 
 
-def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int):
+def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, max_width=None):
     """``(name, outcome of _search_one)`` for each ``(name, stem)`` of
     ``jobs``, in their order: one at a time with one worker, else ``workers``
     threads with at most twice as many images in flight (read, searched or
     done but not yet printed), so that memory stays bounded."""
     if workers <= 1:
         for name, stem in jobs:
-            yield name, _search_one(name, stem, detector, pat, out_dir)
+            yield name, _search_one(name, stem, detector, pat, out_dir, max_width)
         return
     pool = ThreadPoolExecutor(workers, thread_name_prefix="seahough-detect")
     pending: deque = deque()
     todo = iter(jobs)
     try:
         for name, stem in todo:
-            pending.append((name, pool.submit(_search_one, name, stem, detector, pat, out_dir)))
+            pending.append((name, pool.submit(_search_one, name, stem, detector, pat, out_dir,
+                                              max_width)))
             if len(pending) >= 2 * workers:
                 break
         while pending:
@@ -120,7 +146,8 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int):
             done = fut.result()
             nxt = next(todo, None)
             if nxt is not None:
-                pending.append((nxt[0], pool.submit(_search_one, *nxt, detector, pat, out_dir)))
+                pending.append((nxt[0], pool.submit(_search_one, *nxt, detector, pat, out_dir,
+                                                    max_width)))
             yield name, done
     finally:
         # (an error, Ctrl-C or a closed pipe: what has not started is dropped)
@@ -166,11 +193,16 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int):
               help="Write pictures per image here: <stem>_overlay.png (detections), "
               "<stem>_accumulator.png (the vote planes) and <stem>_edges.png (gradients, key "
               "points and segments).")
+@click.option("--max-width", type=str, default=None, metavar="PX|native",
+              callback=_max_width_callback,
+              help="With --out: draw each photo at most PX px wide on its overlay (a wider "
+              "one is shrunk to it); 0 or native: at its own width, pixel for pixel "
+              "(default: 900 px on its longer side).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar or notes; results only.")
 @workers_option("Images searched at once, in threads; results are printed in the order given")
 def detect(pattern, images, scale_range, angle_range, max_results, min_score, min_confidence,
-           max_nfa, downscale, keypoints, equalize, polarity, mask, as_json, out, quiet,
-           workers):
+           max_nfa, downscale, keypoints, equalize, polarity, mask, as_json, out, max_width,
+           quiet, workers):
     """Find PATTERN in each IMAGE.
 
     \b
@@ -211,6 +243,8 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     detector = make_detector(pattern, scale_range, angle_range, max_results, min_score,
                              min_confidence, downscale, keypoints, equalize, polarity, mask,
                              max_nfa=max_nfa)
+    if max_width is not None and out is None:
+        raise click.UsageError("--max-width sizes the pictures of --out: give --out DIR")
     pat = detector.pattern
     out_dir = _out_dir(out) if out is not None else None
     workers = min(workers or default_workers(), len(images))
@@ -218,7 +252,7 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     say = _Output(bar)
     stems: dict[str, int] = {}
     jobs = [(name, _picture_stem(name, out_dir, stems)) for name in images]
-    with closing(_run_jobs(jobs, detector, pat, out_dir, workers)) as outcomes:
+    with closing(_run_jobs(jobs, detector, pat, out_dir, workers, max_width)) as outcomes:
         n_bad, n_missing = _report(outcomes, bar, say, as_json, quiet)
     if bar is not None:
         bar.close()

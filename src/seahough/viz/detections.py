@@ -11,9 +11,11 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.offsetbox import AnchoredOffsetbox, TextArea, VPacker
 
+from ..config import Config
+from ..errors import ParameterError
 from ..geometry import format_angle
 from ._figure import COLOURS, DPI, _OUTLINE, _TEXT_OUTLINE, _as_display, _figure, _finish, \
-    _imshow, _show, _text_size
+    _imshow, _line_ends, _line_extent, _show, _text_size
 
 _IMAGE_BOX = 900        # longer side of an image drawn by plot_detections, px
 _MARGINS = (75, 25, 45, 55)   # left, right, bottom, top margins around it, px
@@ -24,49 +26,131 @@ _MIN_BOX_HEIGHT = 240
 _UNDER_AXIS = 48        # px below a drawn image taken by its x ticks and label
 
 
-def detections_size(shape) -> tuple[int, int]:
+#: Longest side of an image drawn at its own size (``max_width=0``): a
+#: larger one is shrunk to it (a figure's memory, 4 bytes a pixel; Agg's
+#: limit is 65,536 px a side).
+_MAX_NATIVE = 8192
+
+
+def _check_max_width(max_width):
+    """``max_width`` as :func:`plot_detections` uses it: None (the default
+    size), or a whole number of px >= 0 (0 and ``"native"``: the image's own
+    width).
+
+    >>> _check_max_width(None), _check_max_width("native"), _check_max_width(1600.0)
+    (None, 0, 1600)
+    >>> _check_max_width(-1)
+    Traceback (most recent call last):
+    ...
+    seahough.errors.ParameterError: max_width=-1: must be a whole number of px >= 0 \
+(0 or "native": the image's own width), or None
+    """
+    if max_width is None:
+        return None
+    if isinstance(max_width, str) and max_width.strip().lower() == "native":
+        return 0
+    try:
+        v = float(max_width)
+        ok = not isinstance(max_width, (bool, str)) and v >= 0 and v == int(v)
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok:
+        raise ParameterError(f"max_width={max_width!r}: must be a whole number of px >= 0 "
+                             f'(0 or "native": the image\'s own width), or None')
+    return int(v)
+
+
+def _drawn_image(h: int, w: int, max_width) -> tuple[int, int]:
+    """``(width, height)`` in px at which an ``h`` x ``w`` image is drawn:
+    900 px on its longer side (``max_width`` None), else ``max_width`` px
+    wide when it is wider (its own width when not, or for 0), at most
+    :data:`_MAX_NATIVE` px on its longer side."""
+    if max_width is None:
+        s = _IMAGE_BOX / max(h, w)
+    else:
+        s = min(1.0, max_width / w) if max_width > 0 else 1.0
+        s = min(s, _MAX_NATIVE / max(h, w))
+    return max(1, round(w * s)), max(1, round(h * s))
+
+
+def detections_size(shape, *, max_width=None) -> tuple[int, int]:
     """PNG size ``(width, height)`` in px that :func:`plot_detections` makes
     for an image of ``shape`` (height, width, ...).
 
-    The image is drawn 900 px on its longer side, plus margins for the axes
-    and title (75 + 25 px across, 45 + 55 px down), at least 560 px wide and
+    The image is drawn 900 px on its longer side (by default), or at most
+    ``max_width`` px wide (shrunk to it, never enlarged; 0: at its own
+    width, up to 8192 px on its longer side), plus margins for the axes and
+    title (75 + 25 px across, 45 + 55 px down), at least 560 px wide and
     with at least 240 px for the image and what goes under a short strip.
 
     Parameters
     ----------
     shape : tuple of int
         The image's ``(height, width)`` or ``(height, width, channels)``.
+    max_width : int or "native", optional
+        As for :func:`plot_detections`.
 
     Returns
     -------
     (int, int)
         Width and height of the PNG in px.
 
+    Raises
+    ------
+    ParameterError
+        When ``max_width`` is not None, ``"native"`` or a whole number >= 0.
+
     Examples
     --------
     >>> from seahough.viz import detections_size
     >>> detections_size((480, 640)), detections_size((60, 900)), detections_size((400, 40))
     ((1000, 775), (1000, 340), (560, 1000))
+    >>> detections_size((2160, 3840), max_width=0), detections_size((2160, 3840), max_width=1920)
+    ((3940, 2260), (2020, 1180))
     """
     h, w = int(shape[0]), int(shape[1])
-    s = _IMAGE_BOX / max(h, w)
-    iw, ih = max(1, round(w * s)), max(1, round(h * s))
+    iw, ih = _drawn_image(h, w, _check_max_width(max_width))
     left, right, bottom, top = _MARGINS
     return max(_MIN_WIDTH, iw + left + right), max(ih, _MIN_BOX_HEIGHT) + bottom + top
 
 
-def _line_ends(x, y, angle_deg, w, h):
-    """The two ends of the line through (x, y) at ``angle_deg`` (counter-
-    clockwise as displayed) clipped to the image, or None when it misses."""
-    t = math.radians(angle_deg)
-    d = np.array([math.cos(t), -math.sin(t)])
-    L = 2.0 * math.hypot(w, h) + abs(x) + abs(y)
-    p1 = (int(round((x - L * d[0]) * 64)), int(round((y - L * d[1]) * 64)))
-    p2 = (int(round((x + L * d[0]) * 64)), int(round((y + L * d[1]) * 64)))
-    ok, a, b = cv2.clipLine((0, 0, int(w * 64), int(h * 64)), p1, p2)
-    if not ok:
+def _draw_line(ax, d, colour, gray, w, h):
+    """Draw line detection ``d``: the segment along the object (its visible
+    extent, :func:`_line_extent`) as its two borders closed at the ends, and
+    return its ends ``[[x0, y0], [x1, y1]]``; or, when no extent is found,
+    its two borders across the whole image (None)."""
+    borders = [np.asarray(o, float).reshape(-1, 2) for o in d.outline]
+    borders = [o[0] for o in borders if len(o) >= 2]
+    a = math.radians(d.line_angle)
+    dv, nv = np.array([math.cos(a), -math.sin(a)]), np.array([math.sin(a), math.cos(a)])
+    if len(borders) >= 2:
+        half = 0.5 * abs(float(np.dot(borders[0] - borders[1], nv)))
+    else:
+        half = 0.0
+    ext = _line_extent(gray, d, half, Config().min_gradient) if half >= 1.0 else None
+    if ext is None:
+        # the rope's borders (the centre line without them) across the image
+        for bx, by in borders or [np.array([d.x, d.y])]:
+            e = _line_ends(bx, by, d.line_angle, w, h)
+            if e is not None:
+                ax.plot([e[0][0], e[1][0]], [e[0][1], e[1][1]], color=colour, lw=1.8,
+                        path_effects=_OUTLINE)
         return None
-    return (a[0] / 64 - 0.5, a[1] / 64 - 0.5), (b[0] / 64 - 0.5, b[1] / 64 - 0.5)
+    p = np.array([d.x, d.y])
+    ends = np.array([p + ext[0] * dv, p + ext[1] * dv])
+    band = np.array([ends[0] - half * nv, ends[1] - half * nv, ends[1] + half * nv,
+                     ends[0] + half * nv, ends[0] - half * nv])
+    ax.plot(band[:, 0], band[:, 1], color=colour, lw=1.8, path_effects=_OUTLINE)
+    return ends
+
+
+def _nearest_on(seg, x, y) -> tuple[float, float]:
+    """The point of segment ``seg`` (its two ends) nearest ``(x, y)``."""
+    a, b = seg
+    ab = b - a
+    u = float(np.clip(np.dot((x, y) - a, ab) / max(np.dot(ab, ab), 1e-12), 0.0, 1.0))
+    q = a + u * ab
+    return float(q[0]), float(q[1])
 
 
 def _det_label(d) -> str:
@@ -318,7 +402,8 @@ def _notes_below(fig, items, pattern, top_left, width, nf_size):
         _pattern_beside(fig, pattern, x, y, side if pw >= ph else side * pw / ph)
 
 
-def plot_detections(image, detections, path=None, *, pattern=None, title=None) -> Figure:
+def plot_detections(image, detections, path=None, *, pattern=None, title=None,
+                    max_width=None) -> Figure:
     """The image with each detection's outline, origin and numbers.
 
     Parameters
@@ -329,9 +414,11 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None) -
         by an area average before it is drawn.
     detections : list of Detection
         From :meth:`seahough.Detector.detect`; best first. Objects are drawn
-        with their closed outline; lines (``kind == "line"``) across the
-        whole image along ``line_angle`` through ``(x, y)``, with their two
-        borders dashed. Each gets a label
+        with their closed outline; lines (``kind == "line"``) as the
+        segment along the object that the image shows (both borders of the
+        band, edges across ``line_angle`` through ``(x, y)``, closed at the
+        ends where the visible part stops), or as their two borders across
+        the whole image when that cannot be found. Each gets a label
         ``"score 0.87 · conf 0.64 · s 1.23 · 45.0°"`` (angles in [0, 360),
         lines' in [0, 180), wrapped after rounding): beside a single
         detection, or, for several, in a numbered list in the image corner
@@ -348,11 +435,22 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None) -
         farthest from the detections (or beside a narrow image).
     title : str, optional
         Default: how many detections were found.
+    max_width : int or "native", optional
+        Draw the image at most this many px wide: a wider one is shrunk to
+        it, a narrower one drawn at its own size; 0 or ``"native"``: at its
+        own width (pixel for pixel, up to 8192 px on its longer side), e.g.
+        to look closely at a 4K photo. Default (None): 900 px on its longer
+        side, whatever its size.
 
     Returns
     -------
     matplotlib.figure.Figure
         :func:`detections_size` px (1000 x 775 for a 640 x 480 image).
+
+    Raises
+    ------
+    ParameterError
+        When ``max_width`` is not None, ``"native"`` or a whole number >= 0.
 
     Examples
     --------
@@ -366,14 +464,18 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None) -
     >>> tuple(int(v) for v in fig.get_size_inches() * fig.dpi)
     (1000, 775)
     """
+    max_width = _check_max_width(max_width)
     disp, colour = _as_display(image)
     h, w = disp.shape[:2]
-    fw, fh = detections_size((h, w))
+    fw, fh = detections_size((h, w), max_width=max_width)
     fig = _figure(fw, fh)
     left, right, bottom, top = _MARGINS
     iw, ih = fw - left - right, fh - bottom - top
     ax = fig.add_axes([left / fw, bottom / fh, iw / fw, ih / fh])
     _show(ax, disp, colour, (iw, ih))
+    gray = None
+    if any(d.kind == "line" for d in detections or []):
+        gray = cv2.cvtColor(disp, cv2.COLOR_RGB2GRAY) if colour else disp
     ax.set_xlabel("x (px)")
     ax.set_ylabel("y (px)")
     detections = list(detections or [])
@@ -381,16 +483,9 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None) -
     for i, d in enumerate(detections):
         c = COLOURS[i % len(COLOURS)]
         is_line = d.kind == "line"
+        seg = None
         if is_line and d.line_angle is not None:
-            # the rope's two borders, extended across the image (the rope shows
-            # between them); the centre line when the outline is missing
-            borders = [np.asarray(o, float).reshape(-1, 2) for o in d.outline]
-            borders = [o[0] for o in borders if len(o) >= 2] or [np.array([d.x, d.y])]
-            for bx, by in borders:
-                e = _line_ends(bx, by, d.line_angle, w, h)
-                if e is not None:
-                    ax.plot([e[0][0], e[1][0]], [e[0][1], e[1][1]], color=c, lw=1.8,
-                            path_effects=_OUTLINE)
+            seg = _draw_line(ax, d, c, gray, w, h)
         else:
             for o in d.outline:
                 o = np.asarray(o, float).reshape(-1, 2)
@@ -398,7 +493,10 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None) -
                     o = np.vstack([o, o[:1]])
                 ax.plot(o[:, 0], o[:, 1], color=c, lw=2.2, path_effects=_OUTLINE)
         ax.plot([d.x], [d.y], marker="+", ms=16, mew=2.5, color=c, path_effects=_OUTLINE)
-        if is_line:                         # its label at the point nearest the centre
+        if seg is not None:                 # its label on the segment, nearest the centre
+            anchors.append(seg)
+            lx, ly = _nearest_on(seg, d.x, d.y)
+        elif is_line:                       # at the point nearest the centre
             anchors.append(np.array([[d.x, d.y]]))
             lx, ly = d.x, d.y
         else:                               # above the outline's top, centred on it
