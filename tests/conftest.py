@@ -89,14 +89,14 @@ def seahough_command() -> Path:
     return exe
 
 
-def write_frames(frames, folder: Path) -> list:
-    """Frames written as ``f_000.png``, ``f_001.png``... into ``folder``
-    (made if needed); their paths as strings, in order."""
+def write_frames(frames, folder: Path, prefix: str = "f_") -> list:
+    """Frames written as ``<prefix>000.png``, ``<prefix>001.png``... into
+    ``folder`` (made if needed); their paths as strings, in order."""
     import cv2
     folder.mkdir(parents=True, exist_ok=True)
     paths = []
     for i, f in enumerate(frames):
-        p = folder / f"f_{i:03d}.png"
+        p = folder / f"{prefix}{i:03d}.png"
         cv2.imwrite(str(p), f)
         paths.append(str(p))
     return paths

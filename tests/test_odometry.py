@@ -22,7 +22,7 @@ from seahough.geometry import apply_matrix, compose, invert_matrix, matrix_to_po
 from seahough.io.frames import list_frames, time_from_name
 from seahough.motion import read_odometry_csv, run_odometry
 
-from conftest import DATA, data_path
+from conftest import DATA, data_path, write_frames
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 SEQUENCES = ("sparus_auv_seabed", "aqualoc_amphorae_wreck", "subvo_pool_chain",
@@ -57,13 +57,7 @@ def _true_track(mats, shape=SHAPE):
 
 
 def _write_frames(frames, folder: Path, prefix="frame_"):
-    folder.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for i, f in enumerate(frames):
-        p = folder / f"{prefix}{i:03d}.png"
-        cv2.imwrite(str(p), f)
-        paths.append(str(p))
-    return paths
+    return write_frames(frames, folder, prefix)
 
 
 def _hp(gray, sigma=2.0):
