@@ -691,3 +691,141 @@ def test_a_line_without_a_visible_extent_is_drawn_across_the_image(tmp_path):
     fig = plot.plot_detections(flat, [det], tmp_path / "flat.png")
     x0, x1 = _red_extent_along(fig, read_png(tmp_path / "flat.png"), 20.0, 159.5, 119.5, 8)
     assert x0 < 10 and x1 > 310
+
+
+# ------------------------------------------- the pattern inset: shapes from their outline
+GATE = [(0, 80), (0, 0), (60, 0), (60, 80)]
+
+
+def _inset(fig):
+    """The pattern's axes: an inset of the image's, or beside a narrow image."""
+    insets = fig.axes[0].child_axes or fig.axes[1:]
+    assert len(insets) == 1
+    return insets[0]
+
+
+@pytest.mark.parametrize("make", [
+    lambda: seahough.Pattern.polyline(GATE, 6),                                   # open shape
+    lambda: seahough.Pattern.polygon([(0, 0), (3, 0), (300, 297), (300, 300), (297, 300),
+                                      (0, 3)]),                                  # thin, diagonal
+    lambda: seahough.Pattern.circle(30, 22),                                      # a ring
+    lambda: seahough.Pattern.line(200, 8),
+    lambda: seahough.Pattern.rectangle(60, 20)])
+def test_a_shape_pattern_inset_is_drawn_from_its_outline(tmp_path, make):
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import PathPatch
+
+    pattern = make()
+    fig = plot.plot_detections(np.full((480, 640), 60, np.uint8), [], tmp_path / "p.png",
+                               pattern=pattern)
+    ins = _inset(fig)
+    assert not ins.images                             # not the pattern's raster image
+    ph, pw = pattern.image.shape
+    assert ins.get_xlim() == (-0.5, pw - 0.5) and ins.get_ylim() == (ph - 0.5, -0.5)
+    # every polygon of the outline stroked, in pattern-image pixels
+    drawn = [np.asarray(ln.get_xydata()) for ln in ins.lines if isinstance(ln, Line2D)]
+    for o in pattern.outline:
+        assert any(len(d) >= len(o) and np.allclose(d[:len(o)], o) for d in drawn), o
+    # and the shape filled: one patch whose path runs along the outline
+    patches = [p for p in ins.patches if isinstance(p, PathPatch)]
+    assert len(patches) == 1
+    verts = patches[0].get_path().vertices
+    for o in pattern.outline:
+        gap = np.abs(verts[:, None, :] - np.asarray(o)[None, :, :]).max(axis=2).min(axis=0)
+        assert gap.max() < 1e-9, gap.max()
+    assert fig.axes[0].get_window_extent().contains(*ins.get_window_extent().min)
+
+
+def _inset_px(fig, ins, im, x, y):
+    """The PNG's BGR pixel where the inset ``ins`` draws pattern pixel (x, y)."""
+    c, r = _png_xy(fig, ins, x, y)
+    return im[r, c].astype(int)
+
+
+def test_a_gate_inset_shows_its_strips_filled_and_its_gap_empty(tmp_path):
+    gate = seahough.Pattern.polyline(GATE, 6)
+    fig = plot.plot_detections(np.full((480, 640, 3), (90, 70, 30), np.uint8), [],
+                               tmp_path / "gate.png", pattern=gate)
+    im = read_png(tmp_path / "gate.png")
+    ins = _inset(fig)
+    (x0, y0), (x1, _) = gate.polyline_points[0], gate.polyline_points[2]   # the posts' feet
+    post = _inset_px(fig, ins, im, x0, 0.5 * (y0 + gate.polyline_points[1][1]))
+    gap = _inset_px(fig, ins, im, 0.5 * (x0 + x1), y0 - 10)
+    assert post.min() > gap.max() + 60, (post, gap)   # a light strip on a dark ground
+    assert np.ptp(gap) < 10 and gap.max() < 60        # the gap: the dark ground, not the photo
+    red = count_colour(im[int(fig.bbox.height - ins.get_window_extent().y1):
+                          int(fig.bbox.height - ins.get_window_extent().y0),
+                          int(ins.get_window_extent().x0):int(ins.get_window_extent().x1)],
+                       COLOURS[0])
+    assert red > 200                                   # the outline stroked in the first colour
+
+
+def test_a_ring_inset_leaves_its_hole_unfilled(tmp_path):
+    ring = seahough.Pattern.circle(30, 18)
+    fig = plot.plot_detections(np.full((480, 640), 60, np.uint8), [], tmp_path / "ring.png",
+                               pattern=ring)
+    im = read_png(tmp_path / "ring.png")
+    ins = _inset(fig)
+    cx, cy = ring.origin
+    band = _inset_px(fig, ins, im, cx + 24, cy)        # between the radii
+    hole = _inset_px(fig, ins, im, cx - 9, cy + 9)     # inside the hole, off the "+"
+    outside = _inset_px(fig, ins, im, 1, 1)            # the corner, outside the ring
+    assert band.min() > hole.max() + 60
+    assert np.abs(hole - outside).max() < 6
+
+
+def test_an_image_pattern_inset_keeps_its_image_and_its_mask_outline(tmp_path):
+    img = np.full((80, 80), 30, np.uint8)
+    cv2.circle(img, (40, 40), 30, 220, -1)
+    mask = np.zeros_like(img)
+    cv2.circle(mask, (40, 40), 32, 255, -1)
+    for m in (None, mask):
+        pattern = seahough.Pattern.from_image(img, m)
+        fig = plot.plot_detections(np.full((480, 640), 60, np.uint8), [], tmp_path / "i.png",
+                                   pattern=pattern)
+        ins = _inset(fig)
+        assert len(ins.images) == 1 and np.array_equal(ins.images[0].get_array(), img)
+        strokes = [ln for ln in ins.lines if len(ln.get_xydata()) > 1]
+        if m is None:               # no mask: no frame drawn around the whole image
+            assert strokes == []
+        else:                       # the mask's outline: about 32 px from the centre
+            r = np.hypot(*(strokes[0].get_xydata() - 40).T)
+            assert len(strokes) == 1 and np.abs(r - 32).max() < 1.5
+        # its origin marked with a "+"
+        assert any(ln.get_marker() == "+" and np.allclose(ln.get_xydata(), [pattern.origin])
+                   for ln in ins.lines)
+
+
+# ------------------------------------------- the edges picture in image pixels
+def test_edges_picture_is_in_full_resolution_pixels_at_a_working_scale(tmp_path):
+    from matplotlib.collections import LineCollection, PathCollection
+
+    photo = np.full((960, 1280, 3), (90, 70, 30), np.uint8)
+    cv2.rectangle(photo, (500, 300), (899, 599), (200, 220, 230), -1)   # x 500-899, y 300-599
+    res = seahough.Detector(seahough.Pattern.rectangle(400, 300), max_results=1).search(photo)
+    g = res.features.gradients
+    assert g.factor < 0.5 and g.magnitude.shape[1] < 1280 / 2     # searched at a working scale
+    fig = plot.plot_edges(photo, res.features, tmp_path / "edges.png")
+    read_png(tmp_path / "edges.png")
+    ax1, ax2 = fig.axes[0], fig.axes[1]
+    for ax in (ax1, ax2):        # axes, and the images across them, in the photo's pixels
+        assert ax.get_xlim() == (-0.5, 1279.5) and ax.get_ylim() == (959.5, -0.5)
+        assert tuple(ax.images[0].get_extent()) == (-0.5, 1279.5, 959.5, -0.5)
+        assert "image px" in ax.get_xlabel() and "image px" in ax.get_ylabel()
+    # key points: the photo's coordinates of the rectangle's border (not 1/4 of them)
+    pts = [c for c in ax2.collections if isinstance(c, PathCollection)][0].get_offsets()
+    kx, ky = np.asarray(pts, float).T
+    assert len(kx) == len(res.features.keypoints) > 50
+    fx, fy = g.to_full(res.features.edges.x[res.features.keypoints],
+                       res.features.edges.y[res.features.keypoints])
+    assert np.allclose(kx, fx) and np.allclose(ky, fy)
+    near = np.minimum(np.minimum(abs(kx - 499.5), abs(kx - 899.5)),
+                      np.minimum(abs(ky - 299.5), abs(ky - 599.5)))
+    assert np.median(near) < 4 and kx.min() > 480 and kx.max() < 920
+    segs = [c for c in ax2.collections if isinstance(c, LineCollection)][0].get_segments()
+    ends = np.vstack(segs)
+    assert ends[:, 0].min() > 480 and ends[:, 0].max() < 920 and ends[:, 1].max() < 620
+    # the titles say the working scale and size
+    assert f"{g.factor:.2f}".rstrip("0") + "x" in ax2.get_title()
+    assert f"{g.magnitude.shape[1]} x {g.magnitude.shape[0]} px" in ax1.get_title()
+    assert f"{len(res.features.keypoints):,} key points" in ax2.get_title()

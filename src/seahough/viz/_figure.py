@@ -146,18 +146,22 @@ def _fit(a: np.ndarray, box_wh) -> np.ndarray:
     return cv2.resize(a, (min(dw, w), min(dh, h)), interpolation=cv2.INTER_AREA)
 
 
-def _imshow(ax, a: np.ndarray, box_wh=None, **kw):
+def _imshow(ax, a: np.ndarray, box_wh=None, *, extent=None, **kw):
     """``ax.imshow(a, **kw)`` with pixel centres at integer coordinates of
-    ``a``; when ``box_wh`` (the axes' box in px) is given, ``a`` larger than
-    drawn there is shrunk first (:func:`_fit`) and shown pixel for pixel,
-    as is one drawn at its own size (e.g. ``plot_detections(max_width=0)``)."""
+    ``a`` (or spanning ``extent``, (left, right, bottom, top) in data
+    coordinates, e.g. a working image drawn in full-resolution pixels); when
+    ``box_wh`` (the axes' box in px) is given, ``a`` larger than drawn there
+    is shrunk first (:func:`_fit`) and shown pixel for pixel, as is one drawn
+    at its own size (e.g. ``plot_detections(max_width=0)``)."""
     h, w = a.shape[:2]
     if box_wh is not None:
         small = _fit(a, box_wh)
         if small is not a or _drawn_size(a.shape, box_wh) == (w, h):
             a = small
             kw["interpolation"] = "none"      # pixel for pixel: no resampling
-    return ax.imshow(a, extent=(-0.5, w - 0.5, h - 0.5, -0.5), **kw)
+    if extent is None:
+        extent = (-0.5, w - 0.5, h - 0.5, -0.5)
+    return ax.imshow(a, extent=extent, **kw)
 
 
 def _show(ax, disp: np.ndarray, colour: bool, box_wh=None) -> None:

@@ -10,6 +10,8 @@ import cv2
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.offsetbox import AnchoredOffsetbox, TextArea, VPacker
+from matplotlib.patches import PathPatch
+from matplotlib.path import Path as MplPath
 
 from ..config import Config
 from ..errors import ParameterError
@@ -235,15 +237,75 @@ def _label_list(ax, items, corner: int = 1, at=None):
     return anchored
 
 
+#: Pattern kinds drawn from their outline (a shape), not from their image.
+_SHAPE_KINDS = ("rectangle", "line", "polygon", "circle", "ring", "polyline")
+#: Behind a shape: the grey of a shape pattern's background (30).
+_SHAPE_BACK = "#1e1e1e"
+
+
+def _area(o) -> float:
+    """Signed area of polygon ``o`` (positive: counter-clockwise in x, y)."""
+    return 0.5 * float(np.sum(o[:, 0] * np.roll(o[:, 1], -1) - np.roll(o[:, 0], -1) * o[:, 1]))
+
+
+def _shape_path(pattern) -> MplPath:
+    """The shape's area as one path: its outline's closed polygons, a
+    polygon inside an odd number of others a hole (a ring's, a closed
+    polyline's), turned against the rest (matplotlib fills non-zero
+    winding); a line's band between its two borders.
+
+    >>> from seahough import Pattern
+    >>> outer, hole = _shape_path(Pattern.circle(20, 10)).to_polygons()   # a ring
+    >>> bool(_area(outer) > 0), bool(_area(hole) < 0)
+    (True, True)
+    """
+    polys = [np.asarray(o, float).reshape(-1, 2) for o in pattern.outline]
+    if not pattern.closed:                   # a line: its two borders, ends open
+        ends = [o[[0, -1]] for o in polys if len(o) >= 2]
+        polys = [np.vstack([ends[0], ends[1][::-1]])] if len(ends) >= 2 else []
+    polys = [o for o in polys if len(o) >= 3]
+    verts, codes = [], []
+    for i, o in enumerate(polys):
+        depth = sum(MplPath(q).contains_point(o[0]) for j, q in enumerate(polys) if j != i)
+        if (_area(o) > 0) == (depth % 2 == 1):
+            o = o[::-1]
+        verts += [*o, o[0]]
+        codes += [MplPath.MOVETO] + [MplPath.LINETO] * (len(o) - 1) + [MplPath.CLOSEPOLY]
+    return MplPath(np.array(verts).reshape(-1, 2), codes or None)
+
+
+def _is_border(outline, w, h) -> bool:
+    """Is ``outline`` only the pattern image's border (an image without a mask)?"""
+    return len(outline) == 1 and len(outline[0]) == 4 and np.allclose(
+        np.sort(outline[0], axis=0), [(0, 0), (0, 0), (w - 1, h - 1), (w - 1, h - 1)])
+
+
 def _draw_pattern(ins, pattern, box_px):
-    """The pattern's image and outline in the axes ``ins`` (``box_px``, its
-    size in px: a larger pattern image is shrunk to it first), titled."""
-    _imshow(ins, pattern.image, box_px, cmap="gray", vmin=0, vmax=255)
-    for o in pattern.outline:
-        o = np.asarray(o, float)
+    """The pattern in the axes ``ins`` (``box_px``, its size in px), titled,
+    in pattern-image pixels, with a "+" on its origin: a shape (rectangle,
+    line, polygon, circle, ring, polyline) drawn from its outline, filled
+    lightly and stroked, so that a thin or open one reads at any size (its
+    image shrunk to an inset can be a dark box); a line's two borders
+    stroked, its ends open. A pattern made from an image shows the image
+    (a larger one shrunk to the box first), with its mask's outline."""
+    ph, pw = pattern.image.shape
+    colour = COLOURS[0]
+    if pattern.kind in _SHAPE_KINDS:
+        ins.set_facecolor(_SHAPE_BACK)
+        ins.add_patch(PathPatch(_shape_path(pattern), fc=(1, 1, 1, 0.45), ec="none"))
+        lines = [np.asarray(o, float).reshape(-1, 2) for o in pattern.outline]
+    else:
+        _imshow(ins, pattern.image, box_px, cmap="gray", vmin=0, vmax=255)
+        lines = [] if _is_border(pattern.outline, pw, ph) else \
+            [np.asarray(o, float).reshape(-1, 2) for o in pattern.outline]
+    for o in lines:
         if pattern.closed and len(o) > 2:
             o = np.vstack([o, o[:1]])
-        ins.plot(o[:, 0], o[:, 1], color=COLOURS[0], lw=1.5)
+        ins.plot(o[:, 0], o[:, 1], color=colour, lw=1.6, solid_joinstyle="miter")
+    ins.plot([pattern.origin[0]], [pattern.origin[1]], marker="+", ms=9, mew=1.6, color=colour)
+    ins.set_xlim(-0.5, pw - 0.5)
+    ins.set_ylim(ph - 0.5, -0.5)
+    ins.set_aspect("equal")
     ins.set_xticks([]); ins.set_yticks([])
     for s in ins.spines.values():
         s.set_color("white"); s.set_linewidth(1.5)
@@ -431,8 +493,10 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
     path : str or Path, optional
         Where to save the PNG.
     pattern : Pattern, optional
-        Shown as a small inset (with its outline) in the image corner
-        farthest from the detections (or beside a narrow image).
+        Shown as a small inset in the image corner farthest from the
+        detections (or beside a narrow image), with a "+" on its origin: a
+        shape pattern drawn from its outline (filled lightly, stroked), one
+        made from an image as that image (with its mask's outline).
     title : str, optional
         Default: how many detections were found.
     max_width : int or "native", optional
