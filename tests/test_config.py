@@ -23,6 +23,14 @@ def test_bad_odometry_tuning_names_the_field(field, value):
         OdometryTuning(**{field: value})
 
 
+@pytest.mark.parametrize("value", ["x", 1, None, "True"])
+def test_config_colour_is_true_or_false(value):
+    assert seahough.Config().colour is False                  # grey edges unless asked
+    assert seahough.Config(colour=True).colour is True
+    with pytest.raises(seahough.ParameterError, match=r"Config\.colour=.*True or False"):
+        seahough.Config(colour=value)
+
+
 def test_config_search_is_a_search_tuning():
     with pytest.raises(seahough.ParameterError, match="Config.search"):
         seahough.Config(search={"screen": 0.0})

@@ -521,3 +521,88 @@ def test_scene_functions_are_fast():
     for f in (lambda: S.marker_scene(seed=1), lambda: S.frame_pair(seed=1),
               lambda: S.rope_scene(seed=1), lambda: S.fragment_scene(seed=1)):
         assert min(_timed(f) for _ in range(2)) < 0.5
+
+
+# ----------------------------------------------------------------------------
+# curved rope
+# ----------------------------------------------------------------------------
+def _normals(points: np.ndarray) -> np.ndarray:
+    d = np.gradient(points, axis=0)
+    d /= np.hypot(*d.T)[:, None]
+    return np.stack([-d[:, 1], d[:, 0]], 1)
+
+
+@pytest.mark.parametrize("polarity", ["bright", "dark"])
+def test_curved_rope_scene_truth_is_the_centre_line(polarity):
+    scene, truth = S.curved_rope_scene(width=10, bend=40, polarity=polarity, water=None,
+                                       seed=2, source="procedural")
+    assert scene.shape == (480, 640, 3) and truth.width == 10.0
+    assert truth.polarity == polarity and truth.visible.sum() > 200
+    g = _grey(scene).astype(float)
+    pts = truth.points[truth.visible][2:-2]           # (an end is cut across its point)
+    nrm = _normals(truth.points)[truth.visible][2:-2]
+
+    def grey_at(q):
+        ok = (q[:, 0] >= 0) & (q[:, 0] <= 639) & (q[:, 1] >= 0) & (q[:, 1] <= 479)
+        q = np.round(q[ok]).astype(int)
+        return g[q[:, 1], q[:, 0]]
+    on, beside = grey_at(pts), grey_at(pts + 3.0 * truth.width * nrm)
+    if polarity == "bright":
+        assert on.min() > 140 and on.mean() > beside.mean() + 40
+    else:
+        assert on.max() < 80 and on.mean() < beside.mean() - 40
+    # the points are a pixel apart along the rope, the curve smooth
+    steps = np.hypot(*np.diff(truth.points, axis=0).T)
+    np.testing.assert_allclose(steps, 1.0, atol=0.01)
+    # the rope's border is half a width from the line: across it, on the
+    # side away from its faint shadow (the normal (-d[1], d[0]) points to
+    # the shadow), the grey level changes between 0.35 and 0.7 width, and
+    # hardly beyond (the round rope also darkens towards its sides)
+    prof = [grey_at(pts - k * truth.width * nrm).mean() for k in (0.35, 0.7, 1.05)]
+    assert abs(prof[0] - prof[1]) > 15 and abs(prof[0] - prof[1]) > 5 * abs(prof[1] - prof[2])
+
+
+def test_curved_rope_scene_bend_and_form():
+    _, straight = S.curved_rope_scene(bend=0, water=None, seed=1, source="procedural")
+    p = straight.points - straight.points.mean(axis=0)
+    assert np.linalg.svd(p, compute_uv=False)[1] < 1e-6 * len(p)   # on one line
+    assert straight.radius == math.inf
+    _, arc = S.curved_rope_scene(bend=60, form="arc", water=None, seed=1, source="procedural")
+    assert arc.radius == pytest.approx(100 / math.radians(60), rel=1e-3)
+    # an arc: every point at that radius from one centre (three points fix it)
+    a, b, c = arc.points[[0, len(arc.points) // 2, -1]]
+    m = np.array([b - a, c - a])
+    centre = np.linalg.solve(2 * m, [b @ b - a @ a, c @ c - a @ a])
+    np.testing.assert_allclose(np.hypot(*(arc.points - centre).T), arc.radius, rtol=2e-3)
+    # it turns at most 90 degrees each way: no loop
+    assert np.hypot(*(arc.points[0] - arc.points[-1])) > 1.9 * arc.radius
+    _, wave = S.curved_rope_scene(bend=30, form="wave", water=None, seed=4, source="procedural")
+    assert wave.radius >= 100 / math.radians(30) - 1e-6
+
+
+def test_curved_rope_scene_buried_stretch_is_hidden():
+    clear, t0 = S.curved_rope_scene(width=8, bend=20, water=None, seed=5, source="procedural")
+    scene, t1 = S.curved_rope_scene(width=8, bend=20, buried=0.2, water=None, seed=5,
+                                    source="procedural")
+    np.testing.assert_array_equal(t0.points, t1.points)
+    hidden = (t0.visible & ~t1.visible)
+    assert abs(hidden.sum() / t0.visible.sum() - 0.2) < 0.05 and t1.length < t0.length
+    q = np.round(t1.points[hidden]).astype(int)
+    g0, g1 = _grey(clear).astype(float), _grey(scene).astype(float)
+    assert g1[q[:, 1], q[:, 0]].mean() < g0[q[:, 1], q[:, 0]].mean() - 60   # no rope there
+    shown = np.round(t1.points[t1.visible]).astype(int)
+    np.testing.assert_array_equal(g1[shown[:, 1], shown[:, 0]] > 140,
+                                  g0[shown[:, 1], shown[:, 0]] > 140)
+
+
+def test_curved_rope_scene_deterministic_and_checked():
+    a, ta = S.curved_rope_scene(seed=7)
+    b, tb = S.curved_rope_scene(seed=7)
+    np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(ta.points, tb.points)
+    assert not np.array_equal(a, S.curved_rope_scene(seed=8)[0])
+    for kwargs, name in ((dict(width=0), "width"), (dict(bend=-5), "bend"),
+                         (dict(form="zigzag"), "form"), (dict(polarity="red"), "polarity"),
+                         (dict(buried=0.9), "buried")):
+        with pytest.raises(ValueError, match=name):
+            S.curved_rope_scene(**kwargs)

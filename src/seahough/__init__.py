@@ -28,6 +28,7 @@ _WHERE = {
     "Config": ".config",
     "Detection": ".core.detector", "Detector": ".core.detector", "SearchResult": ".core.detector",
     "Pattern": ".core.pattern",
+    "Curve": ".core.curves", "find_curves": ".core.curves",
     "Motion": ".motion", "estimate_motion": ".motion", "run_odometry": ".motion",
     "OdometryResult": ".motion",
     "list_frames": ".io.frames", "read_image": ".io.images", "to_gray": ".io.images",
@@ -49,6 +50,7 @@ __all__ = [
     "Similarity", "pose_to_matrix", "matrix_to_pose", "solve_segment_pair", "read_image", "to_gray",
     "SeahoughError", "ImageError", "ImageReadError", "ImageSizeError", "ImageValueError",
     "ParameterError", "PatternError", "WriteError", "__version__",
+    "Curve", "find_curves",
 ]
 
 
@@ -76,6 +78,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs only
     from .config import Config
     from .core.detector import Detection, Detector, SearchResult
     from .core.pattern import Pattern
+    from .core.curves import Curve, find_curves
     from .errors import (ImageError, ImageReadError, ImageSizeError, ImageValueError,
                          ParameterError, PatternError, SeahoughError, WriteError)
     from .geometry import Similarity, matrix_to_pose, pose_to_matrix, solve_segment_pair

@@ -176,3 +176,82 @@ def test_local_contrast_divides_by_the_mean_around_plus_the_image_mean():
     flat = np.full((5, 5), 10.0, np.float32)
     e = make_edges([2.0, 4.0], [2.0, 0.0], [0.0, 0.0], (5, 5), magnitude=[10.0, 30.0])
     np.testing.assert_allclose(local_contrast(e, flat, 3), [0.5, 1.5], rtol=1e-6)
+
+
+# --- key points on long borders (Config.chain_length) -------------------------
+
+def _box_on_texture(seed=0):
+    """A 120 x 80 box (grey step 40) on strong fine texture (specks of +-90)."""
+    import cv2
+
+    rng = np.random.default_rng(seed)
+    img = np.full((240, 320), 100.0, np.float32)
+    specks = rng.random((240, 320)) < 0.04
+    img[specks] += rng.choice([-90.0, 90.0], specks.sum())
+    img = cv2.GaussianBlur(img, (0, 0), 0.7)
+    img[80:160, 100:220] += 40.0
+    border = np.zeros(img.shape, bool)
+    border[78:83, 98:223] = border[157:162, 98:223] = True
+    border[78:162, 98:103] = border[78:162, 217:222] = True
+    return img, border
+
+
+def test_chain_lengths_join_one_border_and_break_at_turns():
+    from seahough.core import kernels as K
+    from seahough.core.keypoints import CHAIN_TOLERANCE, find_edge_points
+    from seahough.core.preprocess import compute_gradients
+    import math
+
+    img = np.zeros((40, 80), np.float32)
+    img[:, 40:] = 100          # one straight border, 40 px long
+    img[5:7, 5:7] = 100        # a speck
+    e = find_edge_points(compute_gradients(img), 20)
+    c = K.chain_lengths(e.ix, e.iy, e.angle, e.index_map(), math.radians(CHAIN_TOLERANCE))
+    on_border = np.abs(e.x - 39.5) < 1.5
+    assert c[on_border].min() >= 38                # the whole border is one chain
+    assert c[e.x < 20].max() <= 8                  # the speck's edges stay short
+    # directions that differ by more than the tolerance are not joined
+    c0 = K.chain_lengths(e.ix, e.iy, e.angle, e.index_map(), math.radians(0.001))
+    assert c0[on_border].max() >= 38               # a straight border: one direction
+    rng = np.random.default_rng(1)
+    turned = (e.angle + rng.uniform(0.7, 1.0, len(e)).astype(np.float32)
+              * np.where(np.arange(len(e)) % 2, 1, -1).astype(np.float32)) % np.float32(2 * np.pi)
+    c1 = K.chain_lengths(e.ix, e.iy, turned.astype(np.float32), e.index_map(),
+                         math.radians(CHAIN_TOLERANCE))
+    assert c1[on_border].max() <= 3                # every other point turned by 40-57 deg
+
+
+def test_chain_weighting_moves_key_points_from_texture_to_the_border():
+    import seahough
+    from seahough.core.features import extract_features
+
+    shares = {}
+    for chain in (0.0, 8.0):
+        vals = []
+        for seed in range(3):
+            img, border = _box_on_texture(seed)
+            f = extract_features(img, 1.0, seahough.Config(chain_length=chain, n_keypoints=300))
+            kp = f.keypoints
+            vals.append(border[f.edges.iy[kp], f.edges.ix[kp]].mean())
+        shares[chain] = float(np.mean(vals))
+    assert shares[8.0] > shares[0.0] + 0.1, shares
+
+
+def test_long_borders_decide_the_weighting():
+    import seahough
+    from seahough import sim
+
+    P = seahough.Pattern
+    assert P.rectangle(60, 40).has_long_borders() and P.circle(10).has_long_borders()
+    img, mask = sim.marker("cross", 120)
+    assert P.from_image(img).has_long_borders()
+    texture = np.random.default_rng(0).uniform(0, 255, (120, 120)).astype(np.uint8)
+    tex = P.from_image(texture)
+    assert not tex.has_long_borders()
+    frame = P.from_frame(np.random.default_rng(1).uniform(0, 255, (120, 160)).astype(np.uint8))
+    assert not frame.has_long_borders()
+    # a search for texture ranks the image's key points by contrast alone
+    assert seahough.Detector(tex)._features_config().chain_length == 0.0
+    assert seahough.Detector(P.rectangle(60, 40))._features_config().chain_length == 8.0
+    with pytest.raises(seahough.ParameterError, match="chain_length"):
+        seahough.Config(chain_length=-1)

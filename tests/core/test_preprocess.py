@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 
+import cv2
 import numpy as np
 import pytest
 
@@ -143,3 +144,45 @@ def test_choose_factor_settings_of_the_config():
     assert choose_factor((480, 640), Config(downscale=0.3), pattern_extent=40.0) == 0.3
     assert choose_factor((480, 640), Config(target_size=160)) == 0.25
     assert choose_factor((480, 640), Config(min_pattern_size=48), pattern_extent=40.0) == 1.0
+
+
+# ---------------------------------------------------------------- colour
+def test_colour_gradient_of_a_step_in_one_channel_is_its_own_over_root_3():
+    # red alone steps by 30: its Scharr derivative 16 * 30 = 480, averaged
+    # over three channels in the tensor: 480 / sqrt(3); pointing to the red
+    bgr = np.zeros((8, 8, 3), np.float32)
+    bgr[:, 4:, 2] = 30.0
+    g = compute_gradients(bgr)
+    assert g.magnitude[5, 3] == pytest.approx(480 / math.sqrt(3), rel=1e-6)
+    assert g.magnitude[5, 0] == 0.0
+    assert _direction(g, 5, 3) == pytest.approx(0.0, abs=1e-4)
+    bgr = bgr[:, ::-1].copy()                   # red on the left: points to -x
+    assert _direction(compute_gradients(bgr), 5, 4) == pytest.approx(180.0, abs=1e-4)
+
+
+def test_colour_gradient_takes_the_direction_of_most_change_and_its_sign():
+    # blue rises by 10 to the right, red by 40 downwards: the colour changes
+    # most along y, whose derivative (red's) is positive: 90 degrees; the
+    # grey image would mix both (0.114 * 10 along x, 0.299 * 40 along y)
+    yy, xx = np.mgrid[0:9, 0:9].astype(np.float32)
+    bgr = np.dstack([10 * (xx >= 4), np.zeros_like(xx), 40 * (yy >= 4)]).astype(np.float32)
+    g = compute_gradients(bgr)
+    assert _direction(g, 3, 3) == pytest.approx(90.0, abs=1e-3)
+    # the largest eigenvalue of the tensor [[160^2, 0], [0, 640^2]] / 3
+    assert g.magnitude[3, 3] == pytest.approx(640 / math.sqrt(3), rel=1e-6)
+    flipped = compute_gradients(bgr[::-1].copy())
+    assert _direction(flipped, 5, 3) == pytest.approx(270.0, abs=1e-3)
+
+
+@pytest.mark.parametrize("factor, equalize", [(1.0, False), (0.5, False), (1.0, True), (0.5, True)])
+def test_three_equal_channels_give_the_grey_gradients(factor, equalize):
+    rng = np.random.default_rng(5)
+    grey = cv2.GaussianBlur(rng.uniform(0, 255, (40, 60)).astype(np.float32), (0, 0), 2.0)
+    g = compute_gradients(grey, factor, equalize)
+    c = compute_gradients(np.dstack([grey] * 3), factor, equalize)
+    assert c.image.shape == g.image.shape and c.full_shape == (40, 60) == g.full_shape
+    assert (c.fx, c.fy) == (g.fx, g.fy)
+    np.testing.assert_allclose(c.image, g.image, atol=1e-3)
+    np.testing.assert_allclose(c.magnitude, g.magnitude, rtol=1e-5, atol=1e-3)
+    np.testing.assert_allclose(c.gx, g.gx, rtol=1e-4, atol=1e-2)
+    np.testing.assert_allclose(c.gy, g.gy, rtol=1e-4, atol=1e-2)

@@ -15,7 +15,7 @@ from ..errors import SeahoughError, without_name
 
 PROG = "seahough"
 SHAPES_HELP = ("rect:W,H | line:LENGTH,WIDTH | circle:R | circle:R,INNER (a ring) | "
-               "polygon:x1,y1,x2,y2,... | polyline:WIDTH:x1,y1,x2,y2,...")
+               "polygon:x1,y1,x2,y2,... | polyline:WIDTH:x1,y1,x2,y2,... | curve:WIDTH")
 _SHAPE_POLARITY = {"same": "bright", "inverted": "dark", "bright": "bright", "dark": "dark",
                    "either": "either"}
 _IMAGE_POLARITY = {"same": "same", "inverted": "inverted", "bright": "same", "dark": "inverted",
@@ -207,7 +207,7 @@ _SHAPE_USAGE = {"rect": "rect:W,H (e.g. rect:60,40)", "rectangle": "rect:W,H (e.
 
 
 def make_detector(pattern, scale_range, angle_range, max_results, min_score, min_confidence,
-                  downscale, keypoints, equalize, polarity, mask, max_nfa=1.0):
+                  downscale, keypoints, equalize, polarity, mask, max_nfa=1.0, colour=None):
     """The Detector that the search options of ``seahough detect`` (also
     taken by ``survey detect``) describe; PATTERN as :func:`parse_pattern`.
 
@@ -226,13 +226,90 @@ def make_detector(pattern, scale_range, angle_range, max_results, min_score, min
         cfg_kw["n_keypoints_2d"] = keypoints
     if equalize:
         cfg_kw["equalize"] = True
-    pat = parse_pattern(pattern, polarity, mask)
-    return Detector(pat, scale_range, angle_range, config=Config(**cfg_kw),
+    if colour is not None:
+        cfg_kw["colour"] = bool(colour)
+    config = Config(**cfg_kw)
+    kind, sep, rest = pattern.partition(":")
+    if sep and kind.strip().lower() == "curve" and not Path(pattern).is_file():
+        if mask is not None:
+            raise click.BadParameter("--mask applies to image patterns, not curves",
+                                     param_hint="--mask")
+        return CurveSearch(_curve_width(pattern, rest), _SHAPE_POLARITY[polarity or "bright"],
+                           config, max_results, max_nfa)
+    named = parse_patterns(pattern)
+    if named is None:
+        pat = parse_pattern(pattern, polarity, mask, config)
+    else:
+        if mask is not None:
+            raise click.BadParameter("--mask applies to a single image pattern, not to several "
+                                     "patterns", param_hint="--mask")
+        pat = {name: parse_pattern(spec, polarity, None, config) for name, spec in named}
+    return Detector(pat, scale_range, angle_range, config=config,
                     max_results=max_results, min_score=min_score,
                     min_confidence=min_confidence, max_nfa=max_nfa)
 
 
-def parse_pattern(spec: str, polarity: str | None = None, mask: str | None = None):
+def _curve_width(spec: str, rest: str) -> float:
+    """The WIDTH of ``curve:WIDTH``."""
+    v = _numbers(rest, spec)
+    if len(v) != 1 or not v[0] > 0:
+        raise click.BadParameter(f"{spec!r}: expected curve:WIDTH (the rope's width in px, "
+                                 "e.g. curve:8)", param_hint="PATTERN")
+    return float(v[0])
+
+
+class CurveSearch:
+    """``seahough detect curve:WIDTH``: :func:`~seahough.find_curves` in the
+    shape of a Detector's search, for the detect command (its results'
+    ``detections`` are :class:`~seahough.Curve` objects)."""
+
+    parts: dict = {}
+    pattern = None
+
+    def __init__(self, width, polarity, config, max_results, max_nfa):
+        self.width, self.polarity, self.config = width, polarity, config
+        self.max_results, self.max_nfa = max_results, max_nfa
+
+    def search(self, image):
+        from types import SimpleNamespace
+
+        from ..core.curves import find_curves
+
+        curves = find_curves(image, self.width, polarity=self.polarity, config=self.config,
+                             max_curves=self.max_results, max_nfa=self.max_nfa)
+        return SimpleNamespace(detections=curves, note="", planes=None, features=None)
+
+
+def parse_patterns(spec: str):
+    """Several patterns in one PATTERN argument: ``[NAME=]SPEC+[NAME=]SPEC...``
+    as ``[(name, spec), ...]`` (a pattern without a name is named by its
+    spec); None for one pattern (or an existing file whose name holds "+").
+
+    >>> parse_patterns("gate=polyline:6:0,80,0,0,60,0,60,80+circle:16")
+    [('gate', 'polyline:6:0,80,0,0,60,0,60,80'), ('circle:16', 'circle:16')]
+    >>> parse_patterns("rect:60,40") is None
+    True
+    """
+    if "+" not in spec or Path(spec).is_file():
+        return None
+    named = []
+    for part in spec.split("+"):
+        name, eq, rest = part.partition("=")
+        name, rest = name.strip(), rest.strip()
+        if not eq:
+            name, rest = part.strip(), part.strip()
+        if not name or not rest:
+            raise click.BadParameter(f"{spec!r}: expected [NAME=]SPEC+[NAME=]SPEC..., got an "
+                                     f"empty part {part!r}", param_hint="PATTERN")
+        if name in dict(named):
+            raise click.BadParameter(f"{spec!r}: the name {name!r} is given twice",
+                                     param_hint="PATTERN")
+        named.append((name, rest))
+    return named
+
+
+def parse_pattern(spec: str, polarity: str | None = None, mask: str | None = None,
+                  config=None):
     """A :class:`~seahough.Pattern` from an image file or a shape spec.
 
     ``rect:W,H``, ``line:LENGTH,WIDTH``, ``circle:R``, ``circle:R,INNER``
@@ -287,6 +364,7 @@ def parse_pattern(spec: str, polarity: str | None = None, mask: str | None = Non
                                      f"({SHAPES_HELP})", param_hint="PATTERN")
         raise _Fail(f"pattern {spec}: no such file")
     try:
-        return Pattern.from_image(spec, mask=mask, polarity=_IMAGE_POLARITY[polarity or "same"])
+        return Pattern.from_image(spec, mask=mask, polarity=_IMAGE_POLARITY[polarity or "same"],
+                                  config=config)
     except SeahoughError as e:
         raise _Fail(f"pattern {spec}: {_problem(e, spec)}") from None

@@ -17,8 +17,9 @@ from ..core.detector import FLAG_ALONG_LINE, Detector
 from ..errors import SeahoughError
 from ..geometry import format_angle
 from ..io.frames import printable
-from ._common import (_Output, _dumps, _max_nfa_callback, _out_dir, _problem, _progress,
-                      _range_callback, _table, default_workers, make_detector, workers_option)
+from ._common import (CurveSearch, _Output, _dumps, _max_nfa_callback, _out_dir, _problem,
+                      _progress, _range_callback, _table, default_workers, make_detector,
+                      workers_option)
 
 # the command's defaults are the library's, so that both give the same results
 _DET = {k: v.default for k, v in inspect.signature(Detector.__init__).parameters.items()}
@@ -34,7 +35,28 @@ def _nfa_text(nfa) -> str:
     return f"{nfa:.1e}" if math.isfinite(nfa) else "-"
 
 
+def _curve_lines(curves) -> list[str]:
+    header = ("#", "length", "width", "from", "to", "points", "score", "conf", "nfa", "flags")
+    rows = [(i + 1, f"{c.length:.1f}", f"{c.width:.2f}",
+             f"{c.points[0][0]:.1f},{c.points[0][1]:.1f}",
+             f"{c.points[-1][0]:.1f},{c.points[-1][1]:.1f}", len(c.points), f"{c.score:.2f}",
+             f"{c.confidence:.2f}", _nfa_text(c.nfa), ",".join(c.flags))
+            for i, c in enumerate(curves)]
+    return _table(rows, header)
+
+
 def _detection_lines(dets) -> list[str]:
+    if dets and getattr(dets[0], "kind", None) == "curve":
+        return _curve_lines(dets)
+    if any(getattr(d, "pattern", "") for d in dets):   # several patterns: one table
+        header = ("#", "pattern", "x", "y", "scale", "angle", "score", "conf", "nfa", "flags")
+        rows = [(i + 1, d.pattern, f"{d.x:.2f}", f"{d.y:.2f}", f"{d.scale:.3f}",
+                 format_angle(d.line_angle, 2, 180.0) if d.kind == "line"
+                 else format_angle(d.angle, 2),
+                 f"{d.score:.2f}", f"{d.confidence:.2f}", _nfa_text(d.nfa),
+                 ",".join(f for f in d.flags if f != FLAG_ALONG_LINE))
+                for i, d in enumerate(dets)]
+        return _table(rows, header)
     if dets and dets[0].kind == "line":
         header = ("#", "line_angle", "offset", "x", "y", "width_scale", "score", "conf", "nfa",
                   "flags")
@@ -113,6 +135,11 @@ def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir,
         head = f"{Path(name).name}: " + (f"not found{why}" if n == 0 else
                                          f"{n} detection{'s' if n > 1 else ''}")
         ov = out_dir / f"{stem}_overlay.png"
+        if isinstance(detector, CurveSearch):    # curves: the overlay only
+            head = f"{Path(name).name}: " + (f"{n} curve{'s' if n > 1 else ''}" if n
+                                             else "no curve found")
+            plot.plot_curves(img, dets, ov, title=head, max_width=max_width)
+            return res, img.shape[:2], ms, {"overlay": str(ov)}
         ac = out_dir / f"{stem}_accumulator.png"
         ed = out_dir / f"{stem}_edges.png"
         plot.plot_detections(img, dets, ov, pattern=pat, title=head, max_width=max_width)
@@ -182,6 +209,9 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, max_width=No
 @click.option("--keypoints", type=click.IntRange(min=1), default=None,
               help=f"Number of most contrasted edge points kept (default {_CFG.n_keypoints}).")
 @click.option("--equalize", is_flag=True, help="Local contrast equalisation (haze, uneven light).")
+@click.option("--colour/--grey", "colour", default=_CFG.colour, show_default=True,
+              help="Edges from every colour channel of a colour image (an object that differs "
+                   "from its ground by hue more than by brightness), or from its grey levels.")
 @click.option("--polarity", type=click.Choice(["same", "inverted", "either", "bright", "dark"]),
               default=None, help="Contrast of the object: as in the pattern image (same; for "
               "shapes: bright on dark), inverted (dark), or either.")
@@ -201,7 +231,7 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, max_width=No
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar or notes; results only.")
 @workers_option("Images searched at once, in threads; results are printed in the order given")
 def detect(pattern, images, scale_range, angle_range, max_results, min_score, min_confidence,
-           max_nfa, downscale, keypoints, equalize, polarity, mask, as_json, out, max_width,
+           max_nfa, downscale, keypoints, equalize, colour, polarity, mask, as_json, out, max_width,
            quiet, workers):
     """Find PATTERN in each IMAGE.
 
@@ -214,6 +244,11 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
       polygon:x1,y1,x2,y2,x3,y3,...
       polyline:WIDTH:x1,y1,x2,y2,...  open strips WIDTH wide along the
                          points, e.g. a gate: polyline:6:0,80,0,0,60,0,60,80
+      curve:WIDTH        a rope or cable that bends, WIDTH px wide: each
+                         found as the polyline of its centre line
+    Several patterns at once: NAME=SPEC+NAME=SPEC... (e.g.
+    "buoy=circle:16+post=line:120,12"); each detection names its pattern,
+    the strongest evidence (lowest nfa) first; -n is per pattern.
 
     \b
     Positions are pattern-origin pixels (x right, y down); angles degrees
@@ -242,10 +277,10 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     """
     detector = make_detector(pattern, scale_range, angle_range, max_results, min_score,
                              min_confidence, downscale, keypoints, equalize, polarity, mask,
-                             max_nfa=max_nfa)
+                             max_nfa=max_nfa, colour=colour)
     if max_width is not None and out is None:
         raise click.UsageError("--max-width sizes the pictures of --out: give --out DIR")
-    pat = detector.pattern
+    pat = None if detector.parts else detector.pattern   # (the inset: one pattern only)
     out_dir = _out_dir(out) if out is not None else None
     workers = min(workers or default_workers(), len(images))
     bar = _progress(None, len(images), "detect", len(images) > 1 and not quiet)

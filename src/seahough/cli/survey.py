@@ -24,7 +24,7 @@ __all__ = ["survey"]
 
 #: The options of ``seahough detect`` that ``survey detect`` takes too.
 SEARCH_OPTIONS = ("scale_range", "angle_range", "max_results", "min_score", "min_confidence",
-                  "max_nfa", "downscale", "keypoints", "equalize", "polarity", "mask")
+                  "max_nfa", "downscale", "keypoints", "equalize", "colour", "polarity", "mask")
 #: The options of ``seahough odometry`` that ``survey odometry`` takes too.
 ODOMETRY_OPTIONS = ("metres_per_pixel", "altitude", "focal_px", "scale_range", "angle_range",
                     "no_mosaic")
@@ -114,6 +114,9 @@ def detect(pattern, inputs, out, workers, scheduler, batch_size, as_json, quiet,
     """
     from ..survey.detect import detect as run_survey
 
+    if pattern.strip().lower().startswith("curve:") and not Path(pattern).is_file():
+        raise click.BadParameter(f"{pattern!r}: curves are found by 'seahough detect', not "
+                                 "by a survey", param_hint="PATTERN")
     detector = make_detector(pattern, **search)
     result = run_survey(detector, list(inputs), out, workers=workers, scheduler=scheduler,
                         batch_size=batch_size, progress=not quiet and _stderr_is_terminal())

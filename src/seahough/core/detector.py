@@ -11,12 +11,13 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 from ..config import Config
 from .._validate import check_max_nfa, number
 from ..errors import ParameterError
-from ..io.images import to_gray
+from ..io.images import to_image
 from .accumulator import AccumulatorPlanes, accumulate, check_ranges, make_bins, planes
 from .candidates import PoseComparison, SearchContext, find_candidates
 from .features import Features, extract_features
@@ -41,7 +42,9 @@ class SearchResult:
     ``note`` says why a search stopped before voting (its detections are
     then empty): one of :data:`SEARCH_NOTES`. ``planes`` and ``features``
     may then be None. ``candidates`` are the refined candidate poses
-    (:class:`~.candidates.Candidate`), best first.
+    (:class:`~.candidates.Candidate`), best first. For a Detector of several
+    patterns, ``parts`` holds each pattern's own result by name (``planes``
+    is then the first pattern's).
     """
 
     detections: list
@@ -51,6 +54,7 @@ class SearchResult:
     candidates: list
     timings: dict
     note: str = ""
+    parts: dict = field(default_factory=dict)
 
 
 class Detector:
@@ -61,8 +65,15 @@ class Detector:
 
     Parameters
     ----------
-    pattern : Pattern
-        What to look for.
+    pattern : Pattern, or dict or list of Pattern or Detector
+        What to look for. Several patterns (a dict name -> pattern, or a
+        list, named ``"0"``, ``"1"``, ...) are searched in each image with
+        the image's features computed once; each :class:`Detection` names
+        its pattern (``d.pattern``), and they come strongest evidence first
+        (lowest NFA). A pattern given as a :class:`Detector` keeps its own
+        ranges and thresholds (its Config must be the same as the others');
+        a plain Pattern takes this Detector's. ``max_results`` is per
+        pattern.
     scale_range : (float, float)
         Smallest and largest size relative to the pattern. Equal values mean
         a known scale.
@@ -97,11 +108,17 @@ class Detector:
     (199, 110, 1.5, 30, ())
     """
 
-    def __init__(self, pattern: Pattern, scale_range=(0.5, 2.0), angle_range=(0.0, 360.0), *,
+    def __init__(self, pattern, scale_range=(0.5, 2.0), angle_range=(0.0, 360.0), *,
                  config: Config | None = None, max_results: int = 5, min_score: float = 0.5,
                  min_confidence: float = 0.0, max_nfa: float = 1.0, search_region=None):
+        self.parts: dict = {}
         if not isinstance(pattern, Pattern):
-            raise ParameterError(f"pattern must be a seahough.Pattern, got {type(pattern).__name__}")
+            items = _named_items(pattern)
+            kw = dict(config=config, max_results=max_results, min_score=min_score,
+                      min_confidence=min_confidence, max_nfa=max_nfa, search_region=search_region)
+            self.parts = {name: _part(name, item, scale_range, angle_range, kw)
+                          for name, item in items}
+            pattern = next(iter(self.parts.values())).pattern
         self.pattern = pattern
         (self.scale_range, self.angle_range) = check_ranges(scale_range, angle_range)
         self.config = config or Config()
@@ -121,6 +138,16 @@ class Detector:
                                      "with x1 > x0 and y1 > y0")
             search_region = sr
         self.search_region = search_region
+        configs = {id(d.config): d.config for d in self.parts.values()}
+        if config is not None and any(c != self.config for c in configs.values()):
+            raise ParameterError("config: the patterns of one Detector share the image's "
+                                 "features, so their Detectors must have the same Config")
+        if config is None and configs:
+            first = next(iter(configs.values()))
+            if any(c != first for c in configs.values()):
+                raise ParameterError("config: the patterns of one Detector share the image's "
+                                     "features, so their Detectors must have the same Config")
+            self.config = first
 
     def detect(self, image) -> list:
         """Detections of the pattern in ``image`` (path or array), best first.
@@ -138,22 +165,31 @@ class Detector:
         """
         cfg = self.config
         t0 = time.perf_counter()
+        gray = to_image(image, cfg.colour, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
+        if self.parts:
+            return self._search_parts(gray, features, t0)
+        return self._search_pattern(gray, features, t0)
+
+    def _search_pattern(self, gray, features: Features | None, t0: float,
+                        name: str = "", factor: float | None = None) -> SearchResult:
+        """The search of this Detector's one pattern in a working image
+        (``features`` and their ``factor`` given: already computed)."""
+        cfg = self.config
         timings = {}
-        gray = to_gray(image, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
         p = self.pattern
         s0, s1 = self.scale_range
+        angles = self._angles()
         # a pattern that cannot fit the image at any searched scale is not there;
         # larger scales than that are not searched (they would only size the
         # accumulator)
-        fit = 2.0 * math.hypot(*gray.shape) / p.extent
+        fit = 2.0 * math.hypot(*gray.shape[:2]) / p.extent
         s1 = min(s1, max(fit, s0))
-        factor = features.gradients.factor if features is not None else choose_factor(
-            gray.shape, cfg, p.extent, s0)
+        if factor is None:
+            factor = features.gradients.factor if features is not None else choose_factor(
+                gray.shape, cfg, p.extent, s0)
         if features is None:
-            known = (self.scale_range[0] == self.scale_range[1]
-                     and self.angle_range[0] == self.angle_range[1])
-            n_kp = cfg.n_keypoints_2d if known and cfg.n_keypoints_2d is not None else None
-            features = extract_features(gray, factor, cfg, n_keypoints=n_kp)
+            features = extract_features(gray, factor, self._features_config(),
+                                        n_keypoints=self._n_keypoints())
         t1 = time.perf_counter()
         timings["features"] = t1 - t0
         if len(features.segments) < 4:
@@ -166,23 +202,92 @@ class Detector:
         if region is None:
             return SearchResult([], None, features, factor, [], timings,
                                 note="search_region is outside the image")
-        bins = make_bins(pf, (s0, s1), self.angle_range, region, cfg)
+        bins = make_bins(pf, (s0, s1), angles, region, cfg)
         votes = accumulate(pf, features.segments, bins, p.either)
         t2 = time.perf_counter()
         timings["voting"] = t2 - t1
         ctx = SearchContext(p, pf, features, bins, factor, cfg, self.scale_range,
-                            self.angle_range, self.max_results, self.min_score,
+                            angles, self.max_results, self.min_score,
                             PoseComparison(p, pf, bins.step, self.scale_range,
-                                           self.angle_range, cfg.search.overlap),
+                                           angles, cfg.search.overlap),
                             self.max_nfa)
         cands = find_candidates(ctx, votes)
         t3 = time.perf_counter()
         timings["peaks_refine"] = t3 - t2
         dets = rank(ctx, cands, gray, self.min_confidence)
+        for d in dets:
+            d.pattern = name
         timings["full_resolution"] = time.perf_counter() - t3
         timings["total"] = time.perf_counter() - t0
         return SearchResult(dets, planes(votes, bins, features.gradients), features, factor,
                             cands, timings)
+
+    def _features_config(self) -> Config:
+        """The Config of the image's features: key points weighted by their
+        edge chains for a pattern with long borders (a shape, a marker), by
+        contrast alone for texture (a seabed patch, a frame)."""
+        cfg = self.config
+        if cfg.chain_length > 0 and not self.pattern.has_long_borders(cfg):
+            return cfg.replace(chain_length=0.0)
+        return cfg
+
+    def _n_keypoints(self) -> int | None:
+        """How many key points a search takes (None: the Config's default)."""
+        n = self.config.n_keypoints_2d
+        known = (self.scale_range[0] == self.scale_range[1]
+                 and self.angle_range[0] == self.angle_range[1])
+        return n if known and n is not None else None
+
+    def _angles(self) -> tuple:
+        """The rotations searched: a disc or a ring looks the same at every
+        rotation, so it is searched at one (its detections report the range's
+        first angle; the fast path of a known rotation), and a line the same
+        turned by 180 degrees, so at most half a turn of it is searched."""
+        a0, a1 = self.angle_range
+        if self.pattern.kind in ("circle", "ring"):
+            return (a0, a0)
+        if self.pattern.is_line and a1 - a0 > 180.0:   # a band turned by 180 degrees is itself
+            return (a0, a0 + 180.0)
+        return (a0, a1)
+
+    def _search_parts(self, gray, features: Features | None, t0: float) -> SearchResult:
+        """Every pattern searched in one image. The image's features are
+        computed once per working scale (patterns of similar size share
+        one), so each pattern finds what it would find searched alone."""
+        cfg = self.config
+        parts = self.parts
+        shared = {}
+        keys = {}
+        for name, d in parts.items():
+            if features is not None:
+                keys[name] = None
+                shared[None] = features
+                continue
+            fcfg = d._features_config()
+            key = (choose_factor(gray.shape, cfg, d.pattern.extent, d.scale_range[0]),
+                   d._n_keypoints(), fcfg.chain_length)
+            keys[name] = key
+            if key not in shared:
+                shared[key] = extract_features(gray, key[0], fcfg, n_keypoints=key[1])
+        t1 = time.perf_counter()
+        results = {name: d._search_pattern(gray, shared[keys[name]], time.perf_counter(), name,
+                                              None if keys[name] is None else keys[name][0])
+                   for name, d in parts.items()}
+        timings = {"features": t1 - t0}
+        for r in results.values():
+            for k, v in r.timings.items():
+                if k not in ("features", "total"):
+                    timings[k] = timings.get(k, 0.0) + v
+        timings["total"] = time.perf_counter() - t0
+        # the NFA means the same thing for every pattern: the strongest evidence first
+        dets = sorted((d for r in results.values() for d in r.detections),
+                      key=lambda d: (d.nfa if math.isfinite(d.nfa) else math.inf, -d.score))
+        first = next(iter(results.values()))
+        notes = {r.note for r in results.values()}
+        note = "" if "" in notes else first.note
+        return SearchResult(dets, first.planes, first.features, first.factor,
+                            [c for r in results.values() for c in r.candidates], timings,
+                            note, results)
 
     def _region(self, features: Features, factor: float, s1: float):
         """Where the pattern origin may lie, (x0, y0, x1, y1) in working
@@ -203,3 +308,34 @@ class Detector:
             m = 0.1 * p.extent * s1 * factor
             x0, y0, x1, y1 = -m, -m, w - 1 + m, h - 1 + m
         return (float(x0), float(y0), float(x1), float(y1))
+
+
+def _named_items(patterns) -> list:
+    """``(name, Pattern or Detector)`` pairs of a mapping, or of a list
+    (named by position: ``"0"``, ``"1"``, ...)."""
+    if isinstance(patterns, Mapping):
+        items = [(k, v) for k, v in patterns.items()]
+        bad = [k for k, _ in items if not isinstance(k, str) or not k]
+        if bad:
+            raise ParameterError(f"pattern names must be non-empty strings, got {bad[0]!r}")
+    elif isinstance(patterns, (list, tuple)):
+        items = [(str(i), v) for i, v in enumerate(patterns)]
+    else:
+        raise ParameterError("pattern must be a seahough.Pattern, or a dict or list of them, "
+                             f"got {type(patterns).__name__}")
+    if not items:
+        raise ParameterError("pattern: no patterns given")
+    return items
+
+
+def _part(name: str, item, scale_range, angle_range, kw: dict) -> "Detector":
+    """The Detector of one named pattern of a multi-pattern Detector."""
+    if isinstance(item, Detector):
+        if item.parts:
+            raise ParameterError(f"pattern {name!r}: a Detector of several patterns cannot be "
+                                 "one pattern of another")
+        return item
+    if not isinstance(item, Pattern):
+        raise ParameterError(f"pattern {name!r}: expected a seahough.Pattern or Detector, got "
+                             f"{type(item).__name__}")
+    return Detector(item, scale_range, angle_range, **kw)

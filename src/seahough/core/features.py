@@ -7,7 +7,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..config import Config
-from .keypoints import EdgePoints, find_edge_points, local_contrast, select_keypoints
+from .keypoints import (EdgePoints, chain_weight, find_edge_points, local_contrast,
+                        select_keypoints)
 from .preprocess import Gradients, compute_gradients
 from .segments import Segments, trace_segments
 
@@ -44,6 +45,9 @@ def extract_features(gray: np.ndarray, factor: float, config: Config,
     index = edges.index_map()
     strength = (local_contrast(edges, grad.magnitude, config.local_window)
                 if config.local_contrast and len(edges) else None)
+    if config.chain_length > 0 and len(edges):
+        strength = chain_weight(edges, config.chain_length, index,
+                                edges.magnitude if strength is None else strength)
     kp = select_keypoints(edges, n_keypoints or config.n_keypoints, strength)
     seg = trace_segments(edges, kp, config.segment_steps, config.segment_angle_tol,
                          config.max_segments, index)

@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import functools
 import math
-import zipfile
-import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -20,16 +18,20 @@ import numpy as np
 from . import kernels as K
 from ..config import Config
 from .._validate import number
-from ..errors import ImageReadError, ParameterError, PatternError, WriteError
+from ..errors import ParameterError, PatternError
 from .features import extract_features
 from ..io.images import to_gray
-from .keypoints import edge_points_near
+from . import pattern_io as _pio
+from .keypoints import EdgePoints, chain_share, edge_points_near, find_edge_points
 from .preprocess import choose_factor, compute_gradients
 from . import shapes as _shapes
 
 POLARITIES = ("bright", "dark", "either")
 #: What a pattern can be (``Pattern.kind``).
 KINDS = ("image", "frame", "rectangle", "line", "polygon", "circle", "ring", "polyline")
+#: Share of an image pattern's edge points on long chains above which it is a
+#: shape with borders rather than texture (:meth:`Pattern.has_long_borders`).
+LONG_BORDERS = 0.9
 #: Primitive shapes are drawn at most this many pixels a side.
 MAX_SHAPE_SIDE = 8192
 #: ... and at least this many pixels across: anything thinner is drawn alike
@@ -106,7 +108,8 @@ class Pattern:
     ----------
     image : ndarray
         The pattern image (uint8 grey); :attr:`Detection.matrix` maps its
-        pixels into the searched image.
+        pixels into the searched image. A colour pattern image also keeps
+        its colours, whose edges a search with ``Config(colour=True)`` uses.
     mask : ndarray or None
         Which pattern pixels belong to the object.
     origin : tuple of float
@@ -129,14 +132,18 @@ class Pattern:
 
     def __init__(self, image, mask=None, origin=None, *, polarity="bright", kind="image",
                  outline=None, closed=True, edge_mask=None, config: Config | None = None):
-        self._setup(to_gray(image, name="pattern"), mask, origin, polarity, kind, outline,
-                    closed, edge_mask, config)
+        gray, colour = _pio.grey_and_colour(image)
+        self._setup(gray, mask, origin, polarity, kind, outline, closed, edge_mask, config,
+                    colour)
 
-    def _setup(self, gray, mask, origin, polarity, kind, outline, closed, edge_mask, config):
-        """Build the pattern from a checked float32 grey image (levels 0-255)."""
+    def _setup(self, gray, mask, origin, polarity, kind, outline, closed, edge_mask, config,
+               colour=None):
+        """Build the pattern from a checked float32 grey image (levels 0-255)
+        and, for a colour one, its BGR levels (float32 HxWx3)."""
         if kind not in KINDS:
             raise ParameterError(f"kind={kind!r}: must be one of {', '.join(KINDS)}")
         self._gray = gray
+        self._colour = colour
         self.image = np.clip(gray, 0, 255).astype(np.uint8)
         h, w = gray.shape
         if mask is not None:
@@ -187,13 +194,15 @@ class Pattern:
 
     # ------------------------------------------------------------ constructors
     @classmethod
-    def from_image(cls, image, mask=None, origin=None, *, polarity="same") -> "Pattern":
+    def from_image(cls, image, mask=None, origin=None, *, polarity="same",
+                   config: Config | None = None) -> "Pattern":
         """A pattern from a photo of the object (a path or an array).
 
         Parameters
         ----------
         image : path or ndarray
-            The object's picture; grey, BGR or BGRA.
+            The object's picture; grey, BGR or BGRA (searched by its colour
+            edges with ``Config(colour=True)``, by its grey ones otherwise).
         mask : path or ndarray, optional
             Non-zero on the object's pixels; edges outside it (dilated by two
             pixels, so the object's border counts) are ignored.
@@ -202,10 +211,15 @@ class Pattern:
         polarity : {"same", "inverted", "either"}
             Whether the object appears with the same contrast as in the
             pattern image, inverted, or either way.
+        config : Config, optional
+            The configuration it will be searched with: the pattern must have
+            edges under it (an object told from its surroundings by colour
+            alone has edges only with ``Config(colour=True)``).
         """
         if polarity not in _IMAGE_POLARITIES:
             raise ParameterError(f"polarity={polarity!r}: must be one of same, inverted, either")
-        return cls(image, mask, origin, polarity=_IMAGE_POLARITIES[polarity], kind="image")
+        return cls(image, mask, origin, polarity=_IMAGE_POLARITIES[polarity], kind="image",
+                   config=config)
 
     @classmethod
     def from_frame(cls, frame, origin=None, *, config: Config | None = None) -> "Pattern":
@@ -373,7 +387,41 @@ class Pattern:
                 config.n_verify_points, config.min_gradient, config.segment_steps,
                 config.segment_angle_tol, config.max_segments, config.equalize,
                 config.local_contrast, config.local_window,
-                config.pattern_blur if self.is_photo else 0.0)
+                config.pattern_blur if self.is_photo else 0.0, self._edges_from(config).ndim)
+
+    def _edges_from(self, config: Config) -> np.ndarray:
+        """The image whose edges are the pattern's: its colours with
+        ``config.colour`` (when it has any), else its grey levels."""
+        colour = getattr(self, "_colour", None)
+        return colour if config.colour and colour is not None else self._gray
+
+    def has_long_borders(self, config: Config | None = None) -> bool:
+        """Do the pattern's edges lie on long chains (a shape, a marker) rather
+        than texture (a patch of seabed, a camera frame)? Then a search weights
+        the image's key points by their edge chains (``Config.chain_length``);
+        texture is matched by texture and keeps contrast alone. An image
+        pattern has long borders when at least 90 % of its edge points lie on
+        chains of ``chain_length`` points or more (markers: 98 %; seabed
+        patches: 50-77 %).
+
+        >>> Pattern.rectangle(60, 40).has_long_borders()
+        True
+        """
+        config = config or Config()
+        if not self.is_photo:
+            return not self.is_frame
+        key = ("long borders", config.chain_length, config.min_gradient, config.colour)
+        if key not in self._cache:
+            grad = compute_gradients(np.ascontiguousarray(self._edges_from(config), np.float32))
+            edges = find_edge_points(grad, config.min_gradient)
+            if self._edge_mask is not None and len(edges):
+                keep = self._edge_mask[edges.iy, edges.ix]
+                edges = EdgePoints(*(a[keep] for a in (edges.x, edges.y, edges.angle,
+                                                       edges.magnitude, edges.ix, edges.iy)),
+                                   edges.shape, None, edges.nx[keep], edges.ny[keep])
+            share = chain_share(edges, max(config.chain_length, 1.0))
+            self._cache.setdefault(key, share >= LONG_BORDERS)
+        return self._cache[key]
 
     def finish_points(self, factor: float, config: Config | None = None):
         """``(vx, vy, vangle)``: the points that refine a pose found at working
@@ -416,7 +464,8 @@ class Pattern:
         y = f.vy.astype(np.float64) / factor + oy
         # half a working pixel (where the coarse edge may lie) and half a pixel
         r = 0.5 / factor + 0.5
-        gray = 255.0 - self._gray if self.polarity == "dark" else self._gray
+        gray = self._edges_from(config)
+        gray = 255.0 - gray if self.polarity == "dark" else gray
         grad = compute_gradients(np.ascontiguousarray(gray, np.float32), 1.0, config.equalize)
         edges = edge_points_near(grad, x, y, r, config.min_gradient, self._edge_mask)
         f32 = lambda a: np.ascontiguousarray(a, np.float32)
@@ -427,7 +476,7 @@ class Pattern:
         return (f32(edges.x[ids[got]] - ox), f32(edges.y[ids[got]] - oy), f32(edges.angle[ids[got]]))
 
     def _compute_features(self, factor: float, config: Config) -> PatternFeatures:
-        gray = self._gray
+        gray = self._edges_from(config)
         if self.polarity == "dark":
             gray = 255.0 - gray
         if self.is_photo and config.pattern_blur > 0:
@@ -439,7 +488,7 @@ class Pattern:
         mask_w = None
         if em is not None:
             if factor < 0.999:
-                h, w = gray.shape
+                h, w = gray.shape[:2]
                 nw, nh = max(int(round(w * factor)), 1), max(int(round(h * factor)), 1)
                 mask_w = cv2.resize(em.astype(np.uint8), (nw, nh), interpolation=cv2.INTER_NEAREST) > 0
             else:
@@ -450,7 +499,9 @@ class Pattern:
         # but on the tiled pool sequence they answered wrong pairs with
         # confidence, where 8x declines them.
         n_edges = max(config.n_keypoints, 8 * config.n_verify_points)
-        f = extract_features(gray, factor, config, n_keypoints=n_edges, mask=mask_w)
+        # (all its edges, by contrast: chain_length is for the searched image)
+        f = extract_features(gray, factor, config.replace(chain_length=0.0), n_keypoints=n_edges,
+                             mask=mask_w)
         seg = f.segments
         if len(seg) < 8:
             raise PatternError(
@@ -477,7 +528,7 @@ class Pattern:
 
     # ------------------------------------------------------------------ files
     #: Version of the file format written by :meth:`save`.
-    FILE_VERSION = 1
+    FILE_VERSION = _pio.FILE_VERSION
 
     def save(self, path) -> Path:
         """Write the pattern to ``path`` (a ``.npz`` file; numpy arrays and
@@ -494,74 +545,14 @@ class Pattern:
         >>> q.kind, q.origin == p.origin, bool((q.image == p.image).all())
         ('ring', True, True)
         """
-        path = Path(path)
-        if path.suffix != ".npz":
-            path = path.with_name(path.name + ".npz")
-        arrays = {"version": np.array(self.FILE_VERSION), "gray": self._gray,
-                  "origin": np.array(self.origin, float), "polarity": np.array(self.polarity),
-                  "kind": np.array(self.kind), "closed": np.array(bool(self.closed)),
-                  "n_outline": np.array(len(self.outline))}
-        for i, o in enumerate(self.outline):
-            arrays[f"outline_{i}"] = o
-        if self.mask is not None:
-            arrays["mask"] = self.mask
-        if self._edge_mask is not None:
-            arrays["edge_mask"] = self._edge_mask
-        if self.is_line:
-            arrays["line"] = np.array([self.line_length, self.line_width], float)
-        if self.kind == "polyline":   # its width, then its centre line
-            arrays["polyline"] = np.r_[self.polyline_width, self.polyline_points.ravel()]
-        try:
-            with open(path, "wb") as f:
-                np.savez_compressed(f, **arrays)
-        except OSError as e:
-            raise WriteError(f"{path}: cannot write the pattern ({e.strerror or e})") from None
-        return path
+        return _pio.save(self, path)
 
     @classmethod
     def load(cls, path, *, config: Config | None = None) -> "Pattern":
         """A pattern written by :meth:`save` (see there). ``config``: the
         configuration it will be searched with (a frame's features are
         prepared for it at once, as :meth:`from_frame` does)."""
-        path = Path(path)
-        bad = f"{path}: not a saved seahough pattern"
-        try:
-            z = np.load(path, allow_pickle=False)
-        except FileNotFoundError:
-            raise ImageReadError(f"{path}: no such file") from None
-        except IsADirectoryError:
-            raise ImageReadError(f"{path}: is a folder") from None
-        except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as e:
-            raise PatternError(f"{bad} ({e})") from None
-        if not isinstance(z, np.lib.npyio.NpzFile):
-            raise PatternError(f"{bad} (a single array, not a .npz archive)")
-        try:
-            with z:
-                data = {k: z[k] for k in z.files}
-            if int(data["version"]) != cls.FILE_VERSION:
-                raise ValueError(f"format version {int(data['version'])}, "
-                                 f"{cls.FILE_VERSION} expected")
-            kind = str(data["kind"])
-            if kind == "line" and "line" not in data:
-                raise ValueError("a line without its length and width")
-            gray = np.ascontiguousarray(data["gray"], np.float32)
-            if gray.ndim != 2 or gray.dtype != np.float32 or not np.isfinite(gray).all():
-                raise ValueError("its image is not a finite grey image")
-            mask = data.get("mask")
-            outline = [data[f"outline_{i}"] for i in range(int(data["n_outline"]))]
-            p = cls.__new__(cls)
-            p._setup(gray, None if mask is None else mask.astype(bool),
-                     tuple(float(v) for v in data["origin"]), str(data["polarity"]), kind,
-                     outline, bool(data["closed"]), data.get("edge_mask"), config)
-            if kind == "line":
-                p.line_length, p.line_width = (float(v) for v in data["line"])
-            if kind == "polyline":
-                v = np.asarray(data["polyline"], float)
-                p.polyline_width, p.polyline_points = float(v[0]), v[1:].reshape(-1, 2)
-        except (KeyError, TypeError, ValueError, IndexError, zipfile.BadZipFile,
-                zlib.error, EOFError, OSError) as e:
-            raise PatternError(f"{bad} ({e})") from None
-        return p
+        return _pio.load(cls, path, config)
 
     def __repr__(self) -> str:
         h, w = self.image.shape

@@ -50,7 +50,7 @@ class Gradients:
 
 def choose_factor(shape: tuple[int, int], config: Config,
                   pattern_extent: float | None = None, min_scale: float = 1.0) -> float:
-    """The downscale factor for an image of ``shape`` (height, width).
+    """The downscale factor for an image of ``shape`` (height, width[, channels]).
 
     ``config.downscale`` wins when set. Otherwise the longest side is brought
     to ``config.target_size``, but never so far that a pattern of
@@ -64,7 +64,7 @@ def choose_factor(shape: tuple[int, int], config: Config,
     """
     if config.downscale is not None:
         return float(config.downscale)
-    f = min(1.0, config.target_size / max(shape))
+    f = min(1.0, config.target_size / max(shape[:2]))
     if pattern_extent:
         need = config.min_pattern_size / max(pattern_extent * min_scale, 1e-6)
         f = min(1.0, max(f, need))
@@ -72,8 +72,9 @@ def choose_factor(shape: tuple[int, int], config: Config,
 
 
 def scale_image(gray: np.ndarray, factor: float) -> tuple[np.ndarray, float, float]:
-    """Downscale with area averaging; returns (image, fx, fy)."""
-    h, w = gray.shape
+    """Downscale with area averaging (a grey or a colour image, every
+    channel alike); returns (image, fx, fy)."""
+    h, w = gray.shape[:2]
     if factor >= 0.999:
         return gray, 1.0, 1.0
     nw, nh = max(int(round(w * factor)), 1), max(int(round(h * factor)), 1)
@@ -84,14 +85,34 @@ def scale_image(gray: np.ndarray, factor: float) -> tuple[np.ndarray, float, flo
 def compute_gradients(gray: np.ndarray, factor: float = 1.0, equalize: bool = False) -> Gradients:
     """Scale ``gray`` by ``factor`` and take its Scharr gradients.
 
+    A colour image (HxWx3, BGR) gets the Di Zenzo colour gradient: per
+    channel Scharr derivatives ``gx_c, gy_c``, their structure tensor
+    averaged over the channels, ``(sum gx_c^2, sum gx_c gy_c, sum gy_c^2) / 3``,
+    whose largest eigenvalue is the squared magnitude and whose eigenvector
+    is the direction: the direction across which the colour changes most.
+    Averaged (not summed), so that three equal channels give the grey
+    image's magnitude, and a step in one channel alone gives
+    ``1 / sqrt(3)`` of that channel's (``Config.min_gradient`` keeps its
+    unit). The eigenvector has no sign: the gradient points the way the
+    channel that changes most along it increases, i.e. the sign of
+    ``sum_c d_c |d_c|`` where ``d_c`` is channel c's derivative along the
+    eigenvector (a zero sum: +). That is the grey gradient's sign whenever
+    the channels agree, and the same along the whole border between two
+    colours (the ratios of the ``d_c`` are those of the colours'
+    differences), so "bright" and "dark" polarities mean "the dominant
+    channel rises" and "falls" across a colour edge. ``gx, gy`` are the
+    magnitude times that signed direction, so the later stages are those of
+    a grey image; ``Gradients.image`` is the working image made grey.
+
     Parameters
     ----------
     gray : ndarray
-        float32 grey image, levels 0-255.
+        float32 grey image (HxW), or BGR image (HxWx3), levels 0-255.
     factor : float
         Downscale factor in (0, 1].
     equalize : bool
-        Apply CLAHE before the gradients (uneven light, haze).
+        Apply CLAHE before the gradients (uneven light, haze); each channel
+        of a colour image.
 
     Examples
     --------
@@ -99,8 +120,28 @@ def compute_gradients(gray: np.ndarray, factor: float = 1.0, equalize: bool = Fa
     >>> g = compute_gradients(img)
     >>> float(g.magnitude[20, 19]), float(g.magnitude[20, 5])
     (1600.0, 0.0)
+
+    The same step in three equal channels: the same magnitude and direction.
+
+    >>> c = compute_gradients(np.dstack([img] * 3))
+    >>> float(c.magnitude[20, 19]), float(c.gx[20, 19]), float(c.gy[20, 19]), c.image.shape
+    (1600.0, 1600.0, 0.0, (40, 40))
+
+    Green to red at the same grey level: no grey edge, a colour edge, its
+    sign that of red (which changes most, rising to the right).
+
+    >>> bgr = np.zeros((40, 40, 3), np.float32)
+    >>> bgr[:, :20] = (0, 100, 0); bgr[:, 20:] = (0, 0, 100 * 0.587 / 0.299)
+    >>> grey = cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY)
+    >>> round(float(compute_gradients(grey).magnitude[20, 19]))
+    0
+    >>> c = compute_gradients(bgr)
+    >>> round(float(c.magnitude[20, 19])), round(float(c.gx[20, 19])), float(c.gy[20, 19])
+    (2035, 2035, 0.0)
     """
     small, fx, fy = scale_image(gray, factor)
+    if small.ndim == 3:
+        return _colour_gradients(small, fx, fy, gray.shape[:2], equalize)
     if equalize:
         clahe = cv2.createCLAHE(clipLimit=2.0, tileGridSize=(8, 8))
         small = clahe.apply(np.clip(small, 0, 255).astype(np.uint8)).astype(np.float32)
@@ -113,3 +154,53 @@ def compute_gradients(gray: np.ndarray, factor: float = 1.0, equalize: bool = Fa
     mag += gy * gy
     np.sqrt(mag, out=mag)  # (in place: the same numbers, fewer temporaries)
     return Gradients(small, gx, gy, mag, fx, fy, gray.shape)
+
+
+def _colour_gradients(small: np.ndarray, fx: float, fy: float, full_shape,
+                      equalize: bool) -> Gradients:
+    """:func:`compute_gradients` of a working BGR image (see there)."""
+    if equalize:
+        clahe = cv2.createCLAHE(clipLimit=2.0, tileGridSize=(8, 8))
+        small = np.dstack([clahe.apply(np.clip(small[:, :, i], 0, 255).astype(np.uint8))
+                           for i in range(3)])
+    small = np.ascontiguousarray(small, dtype=np.float32)
+    gxc = cv2.Scharr(small, cv2.CV_32F, 1, 0, borderType=cv2.BORDER_REPLICATE)
+    gyc = cv2.Scharr(small, cv2.CV_32F, 0, 1, borderType=cv2.BORDER_REPLICATE)
+    bx, gx_, rx = gxc[:, :, 0], gxc[:, :, 1], gxc[:, :, 2]
+    by, gy_, ry = gyc[:, :, 0], gyc[:, :, 1], gyc[:, :, 2]
+    # (float32 numpy, in place where it can be: a third of the time of a plain
+    # version with arctan2; still about 2 ms at 320x240, against 0.1 for grey)
+    third = np.float32(1.0 / 3.0)
+    a = bx * bx; a += gx_ * gx_; a += rx * rx; a *= third     # the structure tensor
+    b = bx * by; b += gx_ * gy_; b += rx * ry; b *= third     # [[a, b], [b, c]]
+    c = by * by; c += gy_ * gy_; c += ry * ry; c *= third
+    half = a - c
+    half *= np.float32(0.5)
+    r = half * half
+    r += b * b
+    np.sqrt(r, out=r)
+    mag = a
+    mag += c
+    mag *= np.float32(0.5)
+    mag += r                                   # the largest eigenvalue
+    np.sqrt(np.maximum(mag, 0, out=mag), out=mag)
+    # its eigenvector (ux, uy): (half + r, b) or (b, r - half), whichever is
+    # the longer (both are, unless one is zero)
+    up = half >= 0
+    ux, uy = np.where(up, half + r, b), np.where(up, b, r - half)
+    norm = np.hypot(ux, uy)
+    norm[norm == 0] = 1.0
+    ux /= norm
+    uy /= norm
+    # polarity: the sign of sum_c d_c |d_c|, d_c channel c's derivative along it
+    total = np.zeros_like(mag)
+    for cx, cy in ((bx, by), (gx_, gy_), (rx, ry)):
+        d = cx * ux
+        d += cy * uy
+        d *= np.abs(d)
+        total += d
+    mag_s = np.where(total < 0, -mag, mag)
+    gx = np.ascontiguousarray(mag_s * ux, dtype=np.float32)
+    gy = np.ascontiguousarray(mag_s * uy, dtype=np.float32)
+    grey = cv2.cvtColor(small, cv2.COLOR_BGR2GRAY)
+    return Gradients(grey, gx, gy, mag, fx, fy, tuple(full_shape))

@@ -77,6 +77,9 @@ class Detection:
         be expected to find per image by chance, in an image like this one
         holding no such object (:mod:`seahough.core.nfa`). The smaller, the
         stronger the evidence; the Detector accepts ``nfa <= max_nfa``.
+    pattern : str
+        Which pattern this is, for a Detector of several named patterns
+        (``""`` for a Detector of one pattern).
     """
 
     x: float
@@ -93,6 +96,7 @@ class Detection:
     line_offset: float | None = None
     flags: tuple = ()
     nfa: float = float("nan")
+    pattern: str = ""
 
     def to_dict(self) -> dict:
         """Plain-Python form for JSON.
@@ -105,7 +109,7 @@ class Detection:
              "score": self.score, "confidence": self.confidence,
              "matrix": np.asarray(self.matrix).tolist(), "votes": self.votes,
              "kind": self.kind, "flags": list(self.flags),
-             "nfa": self.nfa if math.isfinite(self.nfa) else None}
+             "nfa": self.nfa if math.isfinite(self.nfa) else None, "pattern": self.pattern}
         if self.kind == "line":
             d["line_angle"] = self.line_angle
             d["line_offset"] = self.line_offset
@@ -167,7 +171,7 @@ def _full_edges(ctx: SearchContext, gray, todo):
     vx, vy, _ = ctx.pattern.finish_points(factor, cfg)
     if vx.size < cfg.search.min_finish_points:  # (no edges at full resolution)
         return [None] * len(todo)
-    H, W = gray.shape
+    H, W = gray.shape[:2]  # (a colour image: HxWx3)
     pts = [_full_pose(c.fit, ctx.features).map(vx, vy) for c in todo]
     band_r = int(math.ceil(_full_radius(factor) + cfg.search.band_slack))
     m = band_r + 4
@@ -205,7 +209,7 @@ def _full_res(ctx: SearchContext, fit: Fit, gray, where=None) -> Fit:
         if where is None:  # (a box too small to hold edges, or no finishing points)
             return Fit(pose, fit.score, fit.matched, fit.rms, fit.inside)
         (x0, y0, x1, y1), edges, index = where
-        H, W = gray.shape
+        H, W = gray.shape[:2]  # (a colour image: HxWx3)
         local = Pose(pose.a, pose.b, pose.tx - x0, pose.ty - y0)
         f = refine(local, vx, vy, vang, edges, index,
                    radii=(_full_radius(factor), 1.5) if cfg.refine else (), iterations=3,
@@ -227,6 +231,8 @@ def _full_res(ctx: SearchContext, fit: Fit, gray, where=None) -> Fit:
 def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: float) -> list:
     """Refine the promising candidates at full resolution, rank them by
     that score, keep the distinct ones and rate their confidence.
+    ``gray`` is the full-resolution working image: grey, or BGR when the
+    search is in colour (``Config.colour``).
 
     Returns the detections, best first (``[]``: not found).
     """

@@ -4,13 +4,16 @@ Tests, benchmarks and the demo use it to make photos in which the answer is
 known exactly: a docking marker pasted at a known pose
 (:func:`marker_scene`), a patch of a photo seen again rotated and rescaled
 (:func:`fragment_scene`), two camera frames related by a known similarity
-motion (:func:`frame_pair`), a rope crossing the frame (:func:`rope_scene`),
-a whole camera path (:func:`sequence`).
+motion (:func:`frame_pair`), a rope crossing the frame (:func:`rope_scene`)
+or lying in a curve (:func:`curved_rope_scene`),
+a whole camera path (:func:`sequence`), a marker painted in a colour whose
+red fades with distance in the water (:func:`colour_marker_scene`).
 
 Scenes are built from a background (:mod:`.backgrounds`: a real seabed photo
 from the shared data folder when it is there, else a procedural seabed),
 then degraded by water (:mod:`.water`, which describes the image-formation
-model). Markers, pasting and :class:`Truth` live in :mod:`.markers`.
+model). Markers, pasting and :class:`Truth` live in :mod:`.markers`;
+coloured markers and the contrast left at their border in :mod:`.colour`.
 
 Geometry conventions are those of :mod:`seahough.geometry` (equation 1):
 a 2x3 matrix maps pattern-image (or previous-frame) pixel coordinates to
@@ -29,9 +32,11 @@ Examples
 """
 
 from .backgrounds import background, seabed
+from .colour import PAINTS, BorderContrast, border_contrast, colour_marker_scene, matched_paint
 from .files import write_simulation
 from .markers import MARKERS, Truth, marker, paste_pattern, random_pose
 from .scenes import fragment_scene, frame_pair, marker_scene, negative_scene, rope_scene
+from .scenes import CurveTruth, curved_rope_scene
 from .sequences import sequence
 from .water import PRESETS, Water, apply_water
 
@@ -51,6 +56,13 @@ __all__ = [
     "fragment_scene",
     "frame_pair",
     "rope_scene",
+    "curved_rope_scene",
+    "CurveTruth",
     "sequence",
     "write_simulation",
+    "PAINTS",
+    "BorderContrast",
+    "colour_marker_scene",
+    "border_contrast",
+    "matched_paint",
 ]

@@ -55,11 +55,27 @@ def _marker_rects(name: str, size: float) -> tuple[list[tuple[float, float, floa
                          + ", ".join(repr(m) for m in MARKERS))
 
 
-def marker(name: str = "board", size: int = 120) -> tuple[np.ndarray, np.ndarray]:
+def _paint(value, name: str) -> np.ndarray:
+    """A BGR paint: 3 numbers in 0-255, as a float32 array."""
+    try:
+        bgr = np.asarray(value, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        bgr = np.zeros(0)
+    if bgr.size != 3 or not np.all(np.isfinite(bgr)) or bgr.min() < 0 or bgr.max() > 255:
+        raise ParameterError(f"{name} must be a (B, G, R) colour, 3 numbers in 0-255, "
+                             f"got {value!r}")
+    return bgr.astype(np.float32)
+
+
+def marker(name: str = "board", size: int = 120, *, colour=None,
+           dark=(30, 30, 30)) -> tuple[np.ndarray, np.ndarray]:
     """A flat docking marker on its own canvas.
 
     Bright (242) shapes on a dark (30) canvas, anti-aliased, with a margin of
-    ``max(4, size // 20)`` px on every side:
+    ``max(4, size // 20)`` px on every side. With ``colour``, a BGR image
+    painted so that the colour is always at the marker's outline: the shapes
+    in ``colour`` on a ``dark`` canvas; the board's panel in ``colour``, its
+    frame and cells (bright in the grey board) and the canvas in ``dark``.
 
     - ``"board"``: an ArUco-like square tag: a dark panel with a bright square
       frame and four bright inner cells in an arrangement with no rotational
@@ -77,11 +93,17 @@ def marker(name: str = "board", size: int = 120) -> tuple[np.ndarray, np.ndarray
         One of :data:`MARKERS`.
     size : int
         Longest side of the shape in pixels (>= 16).
+    colour : (B, G, R) or None
+        Paint (0-255 each) where the marker meets its surroundings: the
+        shapes, the board's panel; None = the grey marker.
+    dark : (B, G, R)
+        Paint of the canvas (and of the board's frame and cells) when
+        ``colour`` is given.
 
     Returns
     -------
     image : numpy.ndarray
-        uint8 grey canvas.
+        uint8 grey canvas, or BGR with ``colour``.
     mask : numpy.ndarray
         uint8 coverage of the marker: 255 inside, 0 outside, anti-aliased
         (intermediate) along its border.
@@ -93,7 +115,12 @@ def marker(name: str = "board", size: int = 120) -> tuple[np.ndarray, np.ndarray
     ((48, 36), (48, 36))
     >>> int(image.min()), int(image.max()), int(mask.max())
     (30, 242, 255)
+    >>> orange, mask2 = marker("L", 40, colour=(0, 120, 255))
+    >>> orange.shape, orange[24, 8].tolist(), orange[0, 0].tolist(), bool((mask2 == mask).all())
+    ((48, 36, 3), [0, 120, 255], [30, 30, 30], True)
     """
+    paint = None if colour is None else _paint(colour, "colour")
+    canvas = _paint(dark, "dark")
     if int(size) < 16:
         raise ParameterError(f"marker size must be >= 16 px, got {size!r}")
     size = int(size)
@@ -113,11 +140,18 @@ def marker(name: str = "board", size: int = 120) -> tuple[np.ndarray, np.ndarray
         return cv2.resize(big, (w, h), interpolation=cv2.INTER_AREA).astype(np.float32) / 255.0
 
     cover = render(rects)
-    image = _to_uint8(_DARK + (_BRIGHT - _DARK) * cover)
     if name == "board":
         mask_cover = render([(0.0, 0.0, sw, sh)])
     else:
         mask_cover = cover
+    if paint is None:
+        image = _to_uint8(_DARK + (_BRIGHT - _DARK) * cover)
+    else:
+        # the paint is where the marker meets the seabed: the shapes, or the
+        # board's panel around its (then dark) frame and cells
+        painted = np.clip(mask_cover - cover, 0.0, 1.0) if name == "board" else cover
+        c3 = painted[:, :, None]
+        image = _to_uint8(canvas * (1.0 - c3) + paint * c3)
     # anti-aliased like the image, so a paste has its edge exactly where the
     # pattern's is (a binary mask would leave a dark rim inside the border)
     mask = _to_uint8(255.0 * mask_cover)

@@ -1,10 +1,12 @@
 """Single scenes with exact ground truth: a marker on the seabed (and its
-matched negative), a photo fragment, a pair of camera frames, a rope."""
+matched negative), a photo fragment, a pair of camera frames, a straight
+rope and a curved one."""
 
 from __future__ import annotations
 
 import math
 from pathlib import Path
+from dataclasses import dataclass
 from typing import Union
 
 import cv2
@@ -19,7 +21,8 @@ from .backgrounds import background
 from .markers import Truth, _pose_extent, marker, paste_pattern, random_pose
 from .water import WaterLike, _water_per_frame, apply_water
 
-__all__ = ["marker_scene", "negative_scene", "fragment_scene", "frame_pair", "rope_scene"]
+__all__ = ["marker_scene", "negative_scene", "fragment_scene", "frame_pair", "rope_scene",
+           "curved_rope_scene", "CurveTruth"]
 
 
 def _occlusion_value(rng: np.random.Generator, occlusion) -> float:
@@ -407,19 +410,189 @@ def rope_scene(shape: Shape = (480, 640), *, width: float = 8, angle: float | No
     ys, xs = np.nonzero((s_full > -half - 1.0) & (s_full < 3.5 * float(width) + 2.0))
     s = s_full[ys, xs]
     t = (xs - np.float32(cx)) * d[0] + (ys - np.float32(cy)) * d[1]  # along the rope
+    tone = (np.array([200.0, 232.0, 246.0]) * rng.uniform(0.95, 1.03)).astype(np.float32)
+    scene = apply_water(_paint_rope(bg, ys, xs, s, t, width, tone), water, water_seed)
+    px, py = cx + off * float(n[0]), cy + off * float(n[1])
+    truth = Truth(x=px, y=py, line_angle=a, line_offset=off)
+    return scene, truth
+
+
+def _paint_rope(bg: np.ndarray, ys, xs, s, t, width: float, tone, keep=None) -> np.ndarray:
+    """``bg`` with a twisted rope painted at pixels ``(ys, xs)``, ``s`` px across its
+    centre line (positive: its normal's side, where its faint shadow falls), ``t`` px
+    along it; ``tone`` its BGR colour, ``keep`` (0-1) how much shows (0: buried)."""
+    half = 0.5 * float(width)
     cover = np.clip(half + 0.5 - np.abs(s), 0.0, 1.0)
+    if keep is not None:
+        cover = cover * keep
     u = np.clip(s / max(half, 0.5), -1.0, 1.0)
     profile = np.sqrt(1.0 - 0.75 * u * u)  # round rope: darker at its sides
     period = max(3.0, 1.4 * float(width))
     strands = 0.86 + 0.14 * np.cos(np.float32(2 * math.pi / period) * (t + 0.9 * s))
-    tone = (np.array([200.0, 232.0, 246.0]) * rng.uniform(0.95, 1.03)).astype(np.float32)
     # a faint shadow beside the rope (light from the upper left)
-    shadow = 1.0 - 0.25 * np.exp(-((s - 0.9 * width) / max(width, 1.0)) ** 2)
+    dim = 0.25 if keep is None else 0.25 * keep
+    shadow = 1.0 - dim * np.exp(-((s - 0.9 * width) / max(width, 1.0)) ** 2)
     pix = bg[ys, xs].astype(np.float32) * (shadow * (1.0 - cover))[:, None]
     pix += (profile * strands * cover)[:, None] * tone
     img = bg.copy()
     img[ys, xs] = np.clip(np.rint(pix), 0, 255).astype(np.uint8)
+    return img
+
+
+@dataclass
+class CurveTruth:
+    """Ground truth of :func:`curved_rope_scene`: ``points`` (N, 2), the
+    rope's centre line (x, y), a point a pixel along its whole drawn length
+    (it may run out of the frame); ``visible`` (N,), inside the frame and
+    not buried; ``width`` px; ``radius``, the smallest radius of curvature
+    of the visible rope, px (``inf``: straight); ``polarity``."""
+
+    points: np.ndarray
+    visible: np.ndarray
+    width: float
+    radius: float
+    polarity: str
+
+    @property
+    def length(self) -> float:
+        """Visible length of the rope, px."""
+        return float(np.count_nonzero(self.visible))
+
+
+def _curve_path(rng: np.random.Generator, h: int, w: int, bend: float, form: str):
+    """``(points, theta, kappa)`` of a smooth centre line through the middle
+    of an ``h`` x ``w`` frame, 0.25 px steps, turning at most 90 degrees each
+    way from its middle (a strong arc ends inside the frame, not in a loop)."""
+    diag, step, k_max = math.hypot(h, w), 0.25, math.radians(bend) / 100.0
+    x0, y0 = rng.uniform(0.3, 0.7) * (w - 1), rng.uniform(0.3, 0.7) * (h - 1)
+    th0, sign = float(rng.uniform(0.0, 2.0 * math.pi)), float(rng.choice([-1.0, 1.0]))
+    s = np.arange(0.0, 1.2 * diag, step)
+    if form == "arc":
+        kappa = lambda u: np.full_like(u, sign * k_max)
+    else:  # a wave: the curvature swings from one side to the other
+        period, phase = float(rng.uniform(0.8, 1.6)) * diag, float(rng.uniform(0.0, 2 * math.pi))
+        kappa = lambda u: k_max * np.sin(2.0 * math.pi * u / period + phase)
+    cum = lambda v: np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]))])  # trapezes
+    halves = []
+    for sg in (1.0, -1.0):
+        k = kappa(sg * s)
+        th = th0 + sg * step * cum(k)
+        n = int(np.searchsorted(np.abs(th - th0) > math.pi / 2, True))
+        th, k = th[:n], k[:n]
+        halves.append((x0 + sg * step * cum(np.cos(th)), y0 - sg * step * cum(np.sin(th)), th, k))
+    join = lambda j: np.r_[halves[1][j][::-1], halves[0][j][1:]]   # backwards, then on
+    return np.stack([join(0), join(1)], 1), join(2), join(3)
+
+
+def curved_rope_scene(shape: Shape = (480, 640), *, width: float = 8, bend: float = 20.0,
+                      form: str = "random", polarity: str = "bright", buried: float = 0.0,
+                      water: WaterLike = "moderate", seed: int = 0,
+                      source: Union[str, Path] = "auto") -> tuple[np.ndarray, CurveTruth]:
+    """A twisted rope lying in a smooth curve across the frame.
+
+    The centre line passes through a random point of the frame's middle
+    (0.3-0.7 of each side) in a random direction; its curvature is constant
+    (``form="arc"``) or swings from one side to the other (``"wave"``, an
+    S), at most ``bend`` degrees of turn per 100 px (radius of curvature
+    ``100 / radians(bend)`` px: 286 px at 20, 95 px at 60). It turns at most
+    90 degrees each way from that point (a strong arc ends inside the frame
+    instead of closing a loop). The rope is drawn as :func:`rope_scene`
+    draws it: round, twisted, a faint shadow on the side of its normal
+    ``(-d_y, d_x)``, ``d`` its direction along ``points``.
+
+    Parameters
+    ----------
+    shape : (int, int)
+        ``(height, width)`` of the scene.
+    width : float
+        Rope diameter in pixels.
+    bend : float
+        Largest turn of its direction, degrees per 100 px (0: straight).
+    form : {"random", "arc", "wave"}
+        Shape of the curve (``"random"``: one of the two).
+    polarity : {"bright", "dark"}
+        A pale rope, or a dark cable.
+    buried : float
+        Share (0-0.6) of its visible length hidden under silt, in one gap
+        (two when over 0.15) away from its ends.
+    water, seed, source
+        As for :func:`rope_scene`.
+
+    Returns
+    -------
+    (scene, truth) : (numpy.ndarray, CurveTruth)
+        uint8 BGR scene; the centre line and where it shows.
+
+    Examples
+    --------
+    >>> scene, truth = curved_rope_scene((96, 128), width=6, bend=40, water=None, seed=1,
+    ...                                  source="procedural")
+    >>> scene.shape, truth.points.shape[1], truth.width, round(truth.radius)
+    ((96, 128, 3), 2, 6.0, 143)
+    >>> x, y = np.round(truth.points[truth.visible][10]).astype(int)
+    >>> int(scene[y, x].mean()) > 150                   # bright on the centre line
+    True
+    """
+    rng = np.random.default_rng(seed)
+    h, w = _check_shape(shape)
+    width, bend = float(width), float(bend)
+    for ok, name, value, want in (
+            (1.0 <= width <= 0.25 * min(h, w), "width", width, "1 px to a quarter of the shape"),
+            (0.0 <= bend <= 180.0, "bend", bend, "0-180 degrees per 100 px"),
+            (form in ("random", "arc", "wave"), "form", form, "random, arc or wave"),
+            (polarity in ("bright", "dark"), "polarity", polarity, "bright or dark"),
+            (0.0 <= float(buried) <= 0.6, "buried", buried, "0-0.6")):
+        if not ok:  # (NaN fails the comparisons too)
+            raise ParameterError(f"{name}={value!r}: must be {want}")
+    bg_seed, water_seed, path_seed = _seed_of(rng), _seed_of(rng), _seed_of(rng)
+    prng = np.random.default_rng(path_seed)
+    form = form if form != "random" else ("arc" if prng.uniform() < 0.5 else "wave")
+    fine, theta, kappa = _curve_path(prng, h, w, bend, form)
+    # the centre line, one point a pixel, and where it shows
+    pts, th, kp = fine[::4], theta[::4], kappa[::4]
+    inside = (pts[:, 0] >= 0) & (pts[:, 0] <= w - 1) & (pts[:, 1] >= 0) & (pts[:, 1] <= h - 1)
+    arc = np.arange(len(pts), dtype=np.float64)
+    keep_t, idx = np.ones(len(pts)), np.flatnonzero(inside)
+    if buried > 0 and idx.size > 8:
+        n_gaps = 2 if buried > 0.15 else 1
+        gap = float(buried) * idx.size / n_gaps
+        lo = idx[0] + 0.1 * idx.size
+        hi = max(idx[-1] - 0.1 * idx.size - gap, lo)
+        starts = np.sort(prng.uniform(lo, hi, n_gaps))
+        if n_gaps == 2 and starts[1] < starts[0] + gap + width:
+            starts[1] = min(starts[0] + gap + width, hi)
+        for a in starts:  # soft ends, a rope width long
+            ramp = np.clip(np.minimum(arc - a, a + gap - arc) / width + 0.5, 0.0, 1.0)
+            keep_t = np.minimum(keep_t, 1.0 - ramp)
+    visible = inside & (keep_t > 0.5)
+    bg = background((h, w), bg_seed, source)
+    tone = np.array([200.0, 232.0, 246.0] if polarity == "bright" else [34.0, 38.0, 40.0])
+    tone = (tone * rng.uniform(0.95, 1.03)).astype(np.float32)
+    ip = np.round(pts).astype(np.int64)
+    ok = (ip[:, 0] >= 0) & (ip[:, 0] < w) & (ip[:, 1] >= 0) & (ip[:, 1] < h)
+    # pixels near the line: their nearest centre-line point (labels of a distance
+    # transform, 1.. in row-major order of the seeds), then along and across it
+    seeds, owner = np.full((h, w), 255, np.uint8), np.zeros((h, w), np.int64)
+    seeds[ip[ok, 1], ip[ok, 0]], owner[ip[ok, 1], ip[ok, 0]] = 0, np.flatnonzero(ok)
+    dist, lab = cv2.distanceTransformWithLabels(seeds, cv2.DIST_L2, 5,
+                                                labelType=cv2.DIST_LABEL_PIXEL)
+    ys, xs = np.nonzero(dist <= 3.5 * width + 4.5)
+    i = owner[seeds == 0][lab[ys, xs] - 1]
+    p = np.stack([xs, ys], 1).astype(np.float64)
+    for _ in range(2):                          # to the foot of the perpendicular
+        d = np.stack([np.cos(th[i]), -np.sin(th[i])], 1)
+        ta = arc[i] + np.einsum("ij,ij->i", p - pts[i], d)
+        i = np.clip(np.round(ta), 0, len(pts) - 1).astype(np.int64)
+    n = np.stack([np.sin(th[i]), np.cos(th[i])], 1)
+    d = np.stack([np.cos(th[i]), -np.sin(th[i])], 1)
+    off = np.einsum("ij,ij->i", p - pts[i], d)
+    s = (np.einsum("ij,ij->i", p - pts[i], n) + 0.5 * kp[i] * off * off).astype(np.float32)
+    ta = arc[i] + off
+    ends = np.clip(np.minimum(ta, arc[-1] - ta) + 0.5, 0.0, 1.0)
+    keep = (np.interp(ta, arc, keep_t) * ends).astype(np.float32)
+    img = _paint_rope(bg, ys, xs, s, ta.astype(np.float32), width, tone, keep)
     scene = apply_water(img, water, water_seed)
-    px, py = cx + off * float(n[0]), cy + off * float(n[1])
-    truth = Truth(x=px, y=py, line_angle=a, line_offset=off)
-    return scene, truth
+    vis_k = np.abs(kp[visible])
+    radius = float(1.0 / vis_k.max()) if vis_k.size and vis_k.max() > 1e-9 else math.inf
+    return scene, CurveTruth(points=pts.copy(), visible=visible, width=width, radius=radius,
+                             polarity=polarity)

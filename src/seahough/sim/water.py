@@ -33,8 +33,10 @@ from ._util import _fast_normal, _to_bgr, _to_uint8
 
 __all__ = ["PRESETS", "Water", "apply_water"]
 
-PRESETS: tuple[str, ...] = ("clear", "moderate", "hard")
-"""Names accepted by :meth:`Water.preset`."""
+PRESETS: tuple[str, ...] = ("clear", "moderate", "hard", "oceanic", "coastal")
+"""Names accepted by :meth:`Water.preset`: three conditions of one greenish
+water (``"clear"`` to ``"hard"``), and two water types that differ in colour
+(``"oceanic"``: blue, ``"coastal"``: green, where blue fades too)."""
 
 
 @dataclass
@@ -115,12 +117,21 @@ class Water:
 
     @classmethod
     def preset(cls, name: str) -> "Water":
-        """One of the named conditions ``"clear"``, ``"moderate"``, ``"hard"``.
+        """One of the named conditions of :data:`PRESETS`.
 
         ``"clear"``: a few metres of clear water, slight blue cast.
         ``"moderate"``: typical survey water, red mostly gone, edges still crisp.
         ``"hard"``: murky green water at distance, strong falloff, noise,
         marine snow and JPEG artefacts; objects still recognisable.
+        ``"oceanic"``: open-ocean blue water (about Jerlov's type I-II): blue
+        and green carry far, red fades within metres; blue veiling light.
+        ``"coastal"``: green coastal water (about Jerlov's coastal types 3-5):
+        dissolved matter absorbs blue as well as red, so only green carries;
+        green veiling light, more scatter than ``"moderate"``.
+
+        The coefficients are chosen by hand to give those looks, not fitted
+        to measurements. Every preset attenuates red most, so a red or orange
+        object loses its colour with distance (see :mod:`seahough.sim.colour`).
 
         Parameters
         ----------
@@ -143,6 +154,8 @@ class Water:
         60
         >>> Water.preset("Moderate") == Water()
         True
+        >>> [round(float(t), 2) for t in Water.preset("coastal").transmission]  # B, G, R
+        [0.47, 0.67, 0.3]
         """
         key = str(name).lower()
         if key == "clear":
@@ -155,8 +168,47 @@ class Water:
             return cls(attenuation=(0.16, 0.12, 0.55), distance=5.5,
                        backscatter=(112.0, 128.0, 72.0), strobe=0.55, blur=1.6,
                        noise=7.0, snow=600.0, jpeg_quality=60)
+        if key == "oceanic":
+            return cls(attenuation=(0.05, 0.08, 0.45), distance=3.0,
+                       backscatter=(150.0, 105.0, 35.0), strobe=0.3, blur=0.6,
+                       noise=2.5, snow=80.0, jpeg_quality=90)
+        if key == "coastal":
+            return cls(attenuation=(0.38, 0.20, 0.60), distance=2.0,
+                       backscatter=(85.0, 130.0, 70.0), strobe=0.4, blur=1.1,
+                       noise=4.0, snow=250.0, jpeg_quality=80)
         raise ParameterError(f"unknown water preset {name!r}; valid names: "
                              + ", ".join(repr(p) for p in PRESETS))
+
+    def at(self, distance: float) -> "Water":
+        """The same water with the camera ``distance`` metres from the scene.
+
+        Parameters
+        ----------
+        distance : float
+            Camera-to-scene distance in metres (>= 0).
+
+        Returns
+        -------
+        Water
+            A copy; only ``distance`` differs.
+
+        Examples
+        --------
+        >>> near, far = Water().at(1.0), Water().at(4.0)
+        >>> bool(far.transmission[2] < near.transmission[2])  # red fades with distance
+        True
+        >>> Water().at(-1)
+        Traceback (most recent call last):
+        ...
+        seahough.errors.ParameterError: distance must be >= 0, got -1.0
+        """
+        try:
+            d = float(distance)
+        except (TypeError, ValueError):
+            raise ParameterError(f"distance must be a number, got {distance!r}") from None
+        if not math.isfinite(d):
+            raise ParameterError(f"distance must be finite, got {distance!r}")
+        return dataclasses.replace(self, distance=d)
 
     @property
     def transmission(self) -> np.ndarray:

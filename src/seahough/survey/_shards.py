@@ -52,8 +52,9 @@ __all__ = ["SurveyFolder", "IMAGES_SCHEMA", "DETECTIONS_SCHEMA", "image_row", "F
 
 #: Bumped when the files' layout or columns change (2: detections get
 #: ``nfa``, and the settings ``max_nfa``; a survey of format 1 was made
-#: without either and is not continued).
-FORMAT = 2
+#: without either and is not continued; 3: detections get ``pattern``, the
+#: name of the pattern of a Detector of several).
+FORMAT = 3
 MANIFEST = "survey.json"
 IMAGES = "images.parquet"
 DETECTIONS = "detections.parquet"
@@ -86,6 +87,7 @@ DETECTIONS_SCHEMA = pa.schema([
     ("line_angle", pa.float64()),   # lines only (else null)
     ("line_offset", pa.float64()),
     ("flags", pa.list_(pa.string())),
+    ("pattern", pa.string()),       # the pattern's name ("" for a Detector of one pattern)
 ])
 _IMAGE_COLS = IMAGES_SCHEMA.names
 _DET_COLS = DETECTIONS_SCHEMA.names

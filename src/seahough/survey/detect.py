@@ -80,7 +80,8 @@ def _pattern_digest(p: Pattern) -> str:
     """32 hex digits naming the pattern's content (image, mask, origin, ...)."""
     h = hashlib.blake2b(digest_size=16)
     gray = getattr(p, "_gray", p.image)
-    for a in (gray, p.mask, getattr(p, "_edge_mask", None), *p.outline):
+    for a in (gray, getattr(p, "_colour", None), p.mask, getattr(p, "_edge_mask", None),
+              *p.outline):
         if a is not None:
             h.update(repr((a.shape, a.dtype.str)).encode())
             h.update(a.tobytes())
@@ -98,6 +99,9 @@ def detector_settings(detector: Detector) -> dict:
     >>> detector_settings(Detector(Pattern.rectangle(60, 40), max_nfa=math.inf))["max_nfa"]
     'inf'
     """
+    if detector.parts:   # several patterns: each one's own settings
+        return {"patterns": {name: detector_settings(d) for name, d in detector.parts.items()},
+                "config": asdict(detector.config)}
     p = detector.pattern
     sr = detector.search_region
     return {"pattern": {"kind": p.kind, "size": list(p.image.shape[::-1]),
@@ -139,9 +143,10 @@ def _prepare(detector: Detector, path: str) -> None:
     except Exception:           # unreadable: its row will say why
         return
     cfg = detector.config
-    factor = choose_factor((h, w), cfg, detector.pattern.extent, detector.scale_range[0])
-    detector.pattern.features(factor, cfg)
-    detector.pattern.finish_points(factor, cfg)
+    for d in (detector.parts or {"": detector}).values():
+        factor = choose_factor((h, w), cfg, d.pattern.extent, d.scale_range[0])
+        d.pattern.features(factor, cfg)
+        d.pattern.finish_points(factor, cfg)
 
 
 # ------------------------------------------------------------------ workers
@@ -188,7 +193,7 @@ def search_batch(batch: list, detector: Detector) -> tuple[list, list]:
             nfa = float(d.nfa) if math.isfinite(d.nfa) else None
             dets.append((index, None, rank, d.x, d.y, d.scale, d.angle, d.score, d.confidence,
                          nfa, m, float(d.votes), d.kind, d.line_angle, d.line_offset,
-                         list(d.flags)))
+                         list(d.flags), d.pattern))
     return rows, dets
 
 

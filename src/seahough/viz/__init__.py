@@ -13,6 +13,8 @@ one figure at a time: threads are safe, not faster).
 
 - :mod:`.detections`: :func:`plot_detections` (the image, what was found)
   and :func:`detections_size`;
+- :mod:`.curves`: :func:`plot_curves` (curved ropes found by
+  :func:`seahough.find_curves`);
 - :mod:`.accumulator`: :func:`plot_accumulator` (the accumulator's planes)
   and :func:`scale_angle_marker`;
 - :mod:`.edges`: :func:`plot_edges` (edge points, key points, segments);
@@ -30,9 +32,10 @@ Examples
 
 from ._figure import DPI
 from .accumulator import plot_accumulator, scale_angle_marker
+from .curves import plot_curves
 from .detections import detections_size, plot_detections
 from .edges import plot_edges
 from .trajectory import plot_trajectory, save_mosaic
 
-__all__ = ["plot_detections", "plot_accumulator", "plot_edges", "plot_trajectory",
+__all__ = ["plot_detections", "plot_curves", "plot_accumulator", "plot_edges", "plot_trajectory",
            "save_mosaic", "detections_size", "scale_angle_marker", "DPI"]

@@ -1,7 +1,7 @@
 """The hot loops, compiled with Numba (``cache=True`` wherever a cache can be
 written), one module a stage. Everything else in the package is numpy/OpenCV.
 
-- :mod:`.edges`: edge points, segment tracing, spreading points
+- :mod:`.edges`: edge points, their chains, segment tracing, spreading points
 - :mod:`.voting`: the accumulator's votes and its local maxima
 - :mod:`.matching`: point matching, snapping, ICP
 - :mod:`._common`: the direction test they share, and the conventions
@@ -14,9 +14,9 @@ written), one module a stage. Everything else in the package is numpy/OpenCV.
 from ._cache import kernel_cache
 
 with kernel_cache():
-    from .edges import edge_points, spread_points, trace_segments
+    from .edges import chain_lengths, edge_points, spread_points, trace_segments
     from .matching import chance_coverage, evidence_counts, icp, match_points, snap_points
     from .voting import MODE_ORIENTED, MODE_POINTS, MODE_SEGMENTS, local_maxima, vote
 
-__all__ = ["edge_points", "spread_points", "trace_segments", "chance_coverage", "evidence_counts", "icp", "match_points",
+__all__ = ["chain_lengths", "edge_points", "spread_points", "trace_segments", "chance_coverage", "evidence_counts", "icp", "match_points",
            "snap_points", "MODE_ORIENTED", "MODE_POINTS", "MODE_SEGMENTS", "local_maxima", "vote"]

@@ -259,3 +259,49 @@ def spread_points(x, y, order, min_dist, max_count):
             kept[nk] = i
             nk += 1
     return kept[:nk]
+
+
+@njit(cache=CACHE, nogil=True)
+def _root(parent, i):
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
+
+
+@njit(cache=CACHE, nogil=True)
+def chain_lengths(ix, iy, angle, index, tol):
+    """For each edge point, how many edge points its chain holds: the points
+    joined through 8-neighbours whose directions differ by at most ``tol``
+    radians (union-find; a long smooth border is one chain, texture breaks
+    into short ones). ``index``: the edge points' id image (-1 elsewhere)."""
+    n = ix.size
+    h, w = index.shape
+    parent = np.arange(n, dtype=np.int32)
+    for i in range(n):
+        x = ix[i]
+        y = iy[i]
+        for k in range(4):   # the four forward neighbours: each pair seen once
+            dx = 1 if k == 0 else (k - 2)
+            dy = 0 if k == 0 else 1
+            xx = x + dx
+            yy = y + dy
+            if xx < 0 or xx >= w or yy >= h:
+                continue
+            j = index[yy, xx]
+            if j < 0 or not _same_direction(angle[i], angle[j], tol, False):
+                continue
+            a = _root(parent, i)
+            b = _root(parent, j)
+            if a != b:
+                if a < b:
+                    parent[b] = a
+                else:
+                    parent[a] = b
+    size = np.zeros(n, np.int32)
+    for i in range(n):
+        size[_root(parent, i)] += 1
+    out = np.empty(n, np.int32)
+    for i in range(n):
+        out[i] = size[_root(parent, i)]
+    return out

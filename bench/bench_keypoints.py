@@ -1,0 +1,160 @@
+"""Key points that survive clutter: the share on the object's border.
+
+Scenes: ``seahough.sim.marker_scene`` (a docking marker pasted on a seabed
+background at a random pose, with silt occlusion, then the water model), for
+the four markers in moderate and hard water. For each scene, the key points
+of the search (``SearchResult.features.keypoints``, mapped to image pixels)
+are checked against the marker's border: the pattern image warped by the true
+matrix, its edges (Scharr magnitude over a fifth of its maximum, the canvas
+border left out) dilated by 2 px. Reported: the share of key points on the
+border, and the search's success (best detection within 3 px of the truth).
+
+Variants: ``Config(chain_length=L)`` for L in CHAINS (0: rank by local
+contrast alone, as before; L > 0: weight by the point's edge-chain length).
+
+Split: tune part = seeds 0-19 of each marker and water (L was chosen there),
+test part = seeds 100-139 (reported, never looked at while choosing).
+
+    python bench/bench_keypoints.py --write    # docs/keypoints.md
+    python bench/bench_keypoints.py --quick    # 3 seeds, one water
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import math
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import command, machine  # noqa: E402  (single thread first)
+
+import cv2  # noqa: E402
+import numpy as np  # noqa: E402
+
+import seahough  # noqa: E402
+from seahough import sim  # noqa: E402
+
+CHAINS = (0.0, 8.0, 12.0, 20.0)
+MARKERS = ("cross", "L", "rectangle", "board")
+WATERS = ("moderate", "hard")
+TUNE, TEST = range(0, 20), range(100, 140)
+
+
+def border_mask(scene: np.ndarray, pat: np.ndarray, matrix: np.ndarray) -> np.ndarray:
+    """The marker's edges in the scene (bool, dilated by 2 px)."""
+    h, w = scene.shape[:2]
+    fill = float(np.median(pat))
+    warped = cv2.warpAffine(pat.astype(np.float32), matrix, (w, h), flags=cv2.INTER_LINEAR,
+                            borderValue=fill)
+    canvas = cv2.warpAffine(np.ones(pat.shape[:2], np.float32), matrix, (w, h))
+
+    def mag(a):
+        return cv2.magnitude(cv2.Scharr(a, cv2.CV_32F, 1, 0), cv2.Scharr(a, cv2.CV_32F, 0, 1))
+
+    gm, gc = mag(warped), mag(canvas)
+    edge = (gm > 0.2 * gm.max()) & (gc < 0.5 * gc.max() + 1e-3)
+    return cv2.dilate(edge.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
+
+
+def one(name: str, water: str, seed: int, chain: float) -> tuple[float, bool, float]:
+    scene, pat, truth = sim.marker_scene(name, water=water, seed=seed)
+    det = seahough.Detector(seahough.Pattern.from_image(pat),
+                            config=seahough.Config(chain_length=chain))
+    t = time.process_time()
+    r = det.search(scene)
+    ms = 1000.0 * (time.process_time() - t)
+    f = r.features
+    kp = f.keypoints
+    fx, fy = f.gradients.to_full(f.edges.x[kp], f.edges.y[kp])
+    h, w = scene.shape[:2]
+    ix = np.clip(np.round(fx).astype(int), 0, w - 1)
+    iy = np.clip(np.round(fy).astype(int), 0, h - 1)
+    share = float(border_mask(scene, pat, truth.matrix)[iy, ix].mean()) if kp.size else 0.0
+    d = r.detections
+    ok = bool(d) and math.hypot(d[0].x - truth.x, d[0].y - truth.y) <= 3.0
+    return share, ok, ms
+
+
+def run(seeds, waters) -> dict:
+    out = {}
+    for chain in CHAINS:
+        for name in MARKERS:
+            for water in waters:
+                rows = [one(name, water, s, chain) for s in seeds]
+                out[(chain, name, water)] = (float(np.mean([r[0] for r in rows])),
+                                            sum(r[1] for r in rows) / len(rows),
+                                            float(np.median([r[2] for r in rows])))
+    return out
+
+
+def table(res: dict, waters, n: int) -> str:
+    head = "| chain_length | " + " | ".join(f"{m} {w}" for m in MARKERS for w in waters) + \
+        " | mean share | ms (median) |"
+    sep = "|" + "---|" * (len(MARKERS) * len(waters) + 3)
+    lines = [head, sep]
+    for chain in CHAINS:
+        cells = [res[(chain, m, w)] for m in MARKERS for w in waters]
+        txt = " | ".join(f"{c[0]:.3f} ({100 * c[1]:.0f} %)" for c in cells)
+        lines.append(f"| {chain:g} | {txt} | {np.mean([c[0] for c in cells]):.3f} | "
+                     f"{np.median([c[2] for c in cells]):.1f} |")
+    return "\n".join(lines) + f"\n\n(share of key points on the marker's border (success); {n} scenes per cell)"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--write", action="store_true", help="write docs/keypoints.md")
+    a = ap.parse_args()
+    if a.quick:
+        res = run(range(3), ("hard",))
+        print(table(res, ("hard",), 3))
+        return
+    tune = table(run(TUNE, WATERS), WATERS, len(TUNE))
+    print("tune\n" + tune, flush=True)
+    test = table(run(TEST, WATERS), WATERS, len(TEST))
+    print("test\n" + test)
+    text = f"""# Key points that survive clutter
+
+Generated by `bench/bench_keypoints.py` on {datetime.date.today()}.
+Machine: {machine()}. Command: `{command()}`. CPU time, single-threaded.
+
+Scenes: `sim.marker_scene` (a marker pasted on a seabed background at a random pose with
+silt occlusion, then the water model). A key point is on the border when it lies within
+2 px of the marker's edges at the true pose. `chain_length` L weights each edge point's
+rank by `min(1, chain / L)`, the chain being the edge points joined through neighbours
+whose directions differ by at most 30 degrees (`seahough/core/keypoints.py`).
+
+Split: L was chosen on the tune part (seeds 0-19); the test part (seeds 100-139) was run
+once, after.
+
+## Tune part
+
+{tune}
+
+## Test part
+
+{test}
+
+## Decision
+
+`Config.chain_length` = 8, the best mean share on the tune part. A search weights the
+image's key points by chain only when the pattern has long borders
+(`Pattern.has_long_borders`: at least 90 % of its edge points on chains of L points or
+more; every shape, and markers photographed); a texture pattern (a seabed patch, a camera
+frame) keeps contrast alone, as dead reckoning does. At L = 20 the board's inner cells
+break that rule, so the board falls back to contrast ranking (its share equals L = 0's).
+Times are per search, CPU; when other work shares the machine they move by several ms
+between runs, so compare the rows of one run only. The chain kernel itself takes about
+1 ms on a 320x240 working image.
+"""
+    if a.write:
+        out = Path(__file__).resolve().parents[1] / "docs" / "keypoints.md"
+        out.write_text(text)
+        print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()

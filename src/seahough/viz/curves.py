@@ -1,0 +1,104 @@
+"""The picture of the curved ropes, cables or pipes :func:`seahough.find_curves`
+found: each centre line with the rope's two borders, numbered, and a list of
+their length, width and evidence."""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from ._figure import COLOURS, _OUTLINE, _as_display, _figure, _finish, _show
+from .detections import (_MARGINS, _check_max_width, _free_corners, _label_list, _place_label,
+                         detections_size)
+
+
+def _borders(points: np.ndarray, half: float) -> tuple[np.ndarray, np.ndarray]:
+    """The polyline ``points`` offset by ``half`` px to either side (normals
+    from the neighbouring points)."""
+    p = np.asarray(points, float).reshape(-1, 2)
+    if len(p) < 2:
+        return p, p
+    t = np.gradient(p, axis=0)
+    t /= np.maximum(np.hypot(t[:, 0], t[:, 1]), 1e-9)[:, None]
+    n = np.stack([-t[:, 1], t[:, 0]], axis=1)
+    return p + half * n, p - half * n
+
+
+def _curve_label(c) -> str:
+    nfa = f"{c.nfa:.0e}" if np.isfinite(c.nfa) else "-"
+    flags = f" · {', '.join(c.flags)}" if c.flags else ""
+    return f"length {c.length:.0f} px · width {c.width:.1f} px · score {c.score:.2f} · nfa {nfa}" \
+        + flags
+
+
+def plot_curves(image, curves, path=None, *, title=None, max_width=None) -> Figure:
+    """The image with each curve's centre line and borders.
+
+    Parameters
+    ----------
+    image : ndarray or path
+        The searched image (BGR/BGRA shown in colour, or grey).
+    curves : list of Curve
+        From :func:`seahough.find_curves`, best first: each drawn as two
+        dashed lines 3 px outside the rope's borders (``width / 2 + 3`` px
+        to either side of the centre line, which is drawn thin), so that the
+        rope shows between them, numbered at its first point, and listed with its length,
+        width, score and NFA in the image corner farthest from them; "not
+        found" across the image when the list is empty.
+    path : str or Path, optional
+        Where to save the PNG.
+    title : str, optional
+        Default: how many curves were found.
+    max_width : int or "native", optional
+        As :func:`~seahough.viz.plot_detections` takes it.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        :func:`~seahough.viz.detections_size` px.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from seahough.core.curves import Curve
+    >>> img = np.full((120, 160), 40, np.uint8)
+    >>> c = Curve(np.array([[10.0, 60.0], [80.0, 50.0], [150.0, 70.0]]), 6.0, 0.8, 1e-6, 0.5)
+    >>> fig = plot_curves(img, [c])
+    >>> tuple(int(v) for v in fig.get_size_inches() * fig.dpi)
+    (1000, 775)
+    """
+    max_width = _check_max_width(max_width)
+    disp, colour = _as_display(image)
+    h, w = disp.shape[:2]
+    fw, fh = detections_size((h, w), max_width=max_width)
+    fig = _figure(fw, fh)
+    left, right, bottom, top = _MARGINS
+    iw, ih = fw - left - right, fh - bottom - top
+    ax = fig.add_axes([left / fw, bottom / fh, iw / fw, ih / fh])
+    _show(ax, disp, colour, (iw, ih))
+    ax.set_xlabel("x (px)")
+    ax.set_ylabel("y (px)")
+    curves = list(curves or [])
+    items, anchors = [], []
+    for i, c in enumerate(curves):
+        col = COLOURS[i % len(COLOURS)]
+        p = np.asarray(c.points, float).reshape(-1, 2)
+        # the borders drawn just outside the rope and the centre line thin, so
+        # that the rope itself stays visible between them
+        for b in _borders(p, 0.5 * c.width + 3.0):
+            ax.plot(b[:, 0], b[:, 1], color=col, lw=1.6, ls="--", path_effects=_OUTLINE)
+        ax.plot(p[:, 0], p[:, 1], color=col, lw=0.8, alpha=0.7)
+        anchors.append(p)
+        _place_label(ax, f"#{i + 1}", p[0, 0], p[0, 1], col, w, h)
+        items.append((f"#{i + 1}  " + _curve_label(c), col))
+    if items:
+        corner = _free_corners(np.vstack(anchors), w, h)[0]
+        _label_list(ax, items, corner)
+    else:
+        ax.text(0.5 * w, 0.5 * h, "not found", ha="center", va="center", color="white",
+                fontsize=20, fontweight="bold", path_effects=_OUTLINE)
+    if title is None:
+        n = len(curves)
+        title = "no curve found" if n == 0 else f"{n} curve{'s' if n > 1 else ''}"
+    ax.set_title(title, fontsize=12, loc="left")
+    return _finish(fig, path)

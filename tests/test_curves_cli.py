@@ -1,0 +1,71 @@
+"""``seahough detect curve:WIDTH`` and its picture (issue 15, point 4)."""
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from seahough import sim
+from seahough.cli import main
+from seahough.viz import plot_curves
+
+
+def _cli(args) -> int:
+    with pytest.raises(SystemExit) as e:
+        main(args)
+    return e.value.code
+
+
+@pytest.fixture(scope="module")
+def rope(tmp_path_factory):
+    scene, truth = sim.curved_rope_scene(seed=3, source="procedural")
+    path = tmp_path_factory.mktemp("curve") / "rope.png"
+    cv2.imwrite(str(path), scene)
+    return path, truth
+
+
+def test_detect_curve_json_table_and_picture(rope, tmp_path, capsys):
+    path, truth = rope
+    assert _cli(["detect", "curve:8", str(path), "--json", "-q"]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    c = rec["detections"][0]
+    assert c["kind"] == "curve" and len(c["points"]) >= 5
+    pts = np.asarray(c["points"])
+    true = np.asarray(truth.points, float)
+    d = np.hypot(pts[:, None, 0] - true[None, :, 0], pts[:, None, 1] - true[None, :, 1]).min(1)
+    assert np.median(d) < 2.0
+    out = tmp_path / "pics"
+    assert _cli(["detect", "curve:8", str(path), "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "length" in text.splitlines()[1] and "rope_overlay.png" in text
+    png = cv2.imread(str(out / "rope_overlay.png"))
+    assert png is not None and png.shape[1] == 1000
+    assert not (out / "rope_accumulator.png").exists()
+
+
+def test_detect_curve_nothing_there_and_bad_specs(tmp_path, capsys):
+    flat = tmp_path / "flat.png"
+    cv2.imwrite(str(flat), np.full((240, 320), 90, np.uint8))
+    assert _cli(["detect", "curve:8", str(flat), "--out", str(tmp_path / "o"), "-q"]) == 1
+    assert (tmp_path / "o" / "flat_overlay.png").exists()
+    capsys.readouterr()
+    for spec in ("curve:0", "curve:x", "curve:8,2"):
+        assert _cli(["detect", spec, str(flat)]) == 2
+        err = capsys.readouterr().err
+        assert "curve:WIDTH" in err and "Traceback" not in err
+    assert _cli(["detect", "curve:8", str(flat), "--mask", str(flat)]) == 2
+    assert "--mask" in capsys.readouterr().err
+
+
+def test_plot_curves_draws_borders_outside_the_rope():
+    from seahough.core.curves import Curve
+
+    img = np.full((120, 160), 40, np.uint8)
+    c = Curve(np.array([[10.0, 60.0], [80.0, 60.0], [150.0, 60.0]]), 6.0, 0.8, 1e-6, 0.5)
+    fig = plot_curves(img, [c])
+    ax = fig.axes[0]
+    ys = sorted({round(float(np.mean(line.get_ydata())), 1) for line in ax.lines})
+    assert ys == [54.0, 60.0, 66.0]     # borders at +-(3 + 3) px, the centre line
+    fig = plot_curves(img, [])
+    assert any(t.get_text() == "not found" for t in fig.axes[0].texts)
