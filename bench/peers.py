@@ -48,6 +48,14 @@ Peers and the settings used (the documentation each follows is named):
   sigma-1 Gaussian blur, as in OpenCV's Hough line tutorial), the two rope
   borders paired (parallel within 2 degrees, 0.5-1.6 rope widths apart), the
   strongest line as fallback.
+- RoboSub props (bench/bench_robosub.py; each function's docstring gives
+  its settings, which that benchmark tunes): :func:`hough_circles`
+  (``cv2.HoughCircles``, HOUGH_GRADIENT or HOUGH_GRADIENT_ALT, after OpenCV's
+  Hough circle tutorial), :func:`hough_posts` (``cv2.HoughLinesP`` segments
+  near vertical grouped into posts), :func:`match_template_multiscale`
+  (``cv2.matchTemplate`` TM_CCOEFF_NORMED over scales, either polarity,
+  non-maximum suppression) and :class:`GHTGuilOpts` (:class:`GHTGuil` with
+  its Canny and vote thresholds set per instance).
 """
 
 from __future__ import annotations
@@ -572,3 +580,224 @@ def klt_pair(prev, cur) -> PeerResult:
         return PeerResult(None, 0.0, False)
     n_in = int(inl.sum()) if inl is not None else 0
     return PeerResult(M.astype(float), float(n_in), int(ok.sum()) >= MIN_MATCH_COUNT)
+
+
+# --------------------------------------------------------------------------
+# RoboSub props (bench/bench_robosub.py): circles, posts, multi-scale templates
+# --------------------------------------------------------------------------
+
+def hough_circles(scene, method: str = "gradient", dp: float = 1.0, param1: float = 100.0,
+                  param2: float = 30.0, radius=(5, 100), min_dist: float | None = None,
+                  blur: int = 5) -> list[tuple[float, float, float]]:
+    """Circles ``(x, y, r)`` in full-resolution pixels, in the order
+    ``cv2.HoughCircles`` returns them (strongest first), as in OpenCV's
+    "Hough Circle Transform" tutorial: the grey image median-blurred
+    (``blur`` px; 0: none), ``method`` "gradient" (``cv2.HOUGH_GRADIENT``:
+    ``param1`` the upper Canny threshold, ``param2`` the accumulator
+    threshold) or "alt" (``cv2.HOUGH_GRADIENT_ALT``: ``param2`` the
+    "perfectness" in (0, 1]), radii in ``radius``, centres at least
+    ``min_dist`` apart (default: the tutorial's rows / 16).
+
+    >>> import numpy as np, cv2
+    >>> img = np.full((200, 240), 40, np.uint8)
+    >>> _ = cv2.circle(img, (120, 90), 30, 220, -1)
+    >>> [round(v) for v in hough_circles(img, "alt", 1.5, 300, 0.9, radius=(10, 60))[0]]
+    [120, 90, 30]
+    """
+    g = grey(scene)
+    if blur:
+        g = cv2.medianBlur(g, int(blur))
+    kind = cv2.HOUGH_GRADIENT_ALT if method == "alt" else cv2.HOUGH_GRADIENT
+    md = g.shape[0] / 16.0 if min_dist is None else float(min_dist)
+    out = cv2.HoughCircles(g, kind, float(dp), md, param1=float(param1), param2=float(param2),
+                           minRadius=int(radius[0]), maxRadius=int(radius[1]))
+    if out is None:
+        return []
+    return [(float(x), float(y), float(r)) for x, y, r in out.reshape(-1, out.shape[-1])[:, :3]]
+
+
+def segment_angle(x1: float, y1: float, x2: float, y2: float) -> float:
+    """Direction of a segment in degrees [0, 180), counter-clockwise from +x
+    as displayed (y down), seahough's ``line_angle`` convention.
+
+    >>> segment_angle(0, 10, 0, 0), segment_angle(0, 0, 10, 0), round(segment_angle(0, 0, 10, -10))
+    (90.0, 0.0, 45)
+    """
+    return math.degrees(math.atan2(-(y2 - y1), x2 - x1)) % 180.0
+
+
+def hough_posts(scene, canny=(50, 150), threshold: int = 50, min_length: float = 40.0,
+                max_gap: float = 10.0, max_tilt: float = 30.0, merge_px: float = 30.0,
+                merge_angle: float = 5.0) -> list[tuple[float, float, float, float]]:
+    """Upright posts from ``cv2.HoughLinesP``: ``(angle, x, y, strength)``,
+    strongest first, each a line through ``(x, y)`` at ``angle`` (degrees,
+    :func:`segment_angle`'s convention).
+
+    Canny on the grey image after a sigma-1 Gaussian blur (as in OpenCV's
+    Hough line tutorial and :func:`hough_rope`), ``cv2.HoughLinesP`` (1 px,
+    1 degree, ``threshold`` votes, ``min_length``, ``max_gap``); segments
+    within ``max_tilt`` degrees of vertical are kept and grouped, longest
+    first: a segment joins a group when its direction is within
+    ``merge_angle`` degrees and its line passes within ``merge_px`` pixels
+    of the group's (at the group's mean height) -- the two borders of one
+    post become one candidate. A group's line: the length-weighted mean of
+    its segments' midpoints and directions; its strength: their total length.
+
+    >>> import numpy as np, cv2
+    >>> img = np.full((240, 320), 40, np.uint8)
+    >>> _ = cv2.rectangle(img, (150, 20), (165, 220), 220, -1)
+    >>> a, x, y, s = hough_posts(img)[0]
+    >>> round(a), round(x), len(hough_posts(img))
+    (90, 157, 1)
+    """
+    g = cv2.GaussianBlur(grey(scene), (0, 0), 1.0)
+    e = cv2.Canny(g, float(canny[0]), float(canny[1]))
+    segs = cv2.HoughLinesP(e, 1, math.pi / 180, int(threshold), minLineLength=float(min_length),
+                           maxLineGap=float(max_gap))
+    if segs is None:
+        return []
+    segs = segs.reshape(-1, 4).astype(float)
+    length = np.hypot(segs[:, 2] - segs[:, 0], segs[:, 3] - segs[:, 1])
+    groups: list[list] = []     # [sum_len, sum_len*mx, sum_len*my, sum_len*unit vector (dx, dy)]
+    for i in np.argsort(-length):
+        x1, y1, x2, y2 = segs[i]
+        a = segment_angle(x1, y1, x2, y2)
+        if abs(a - 90.0) > max_tilt:
+            continue
+        L = float(length[i])
+        mx, my = 0.5 * (x1 + x2), 0.5 * (y1 + y2)
+        u = np.array([math.cos(math.radians(a)), -math.sin(math.radians(a))])
+        for grp in groups:
+            ga = segment_angle(0.0, 0.0, grp[3][0], grp[3][1])
+            gx, gy = grp[1] / grp[0], grp[2] / grp[0]
+            # this segment's line at the group's height
+            xa = mx + (gy - my) * (u[0] / u[1]) if abs(u[1]) > 1e-9 else math.inf
+            if abs(ga - a) <= merge_angle and abs(xa - gx) <= merge_px:
+                grp[0] += L
+                grp[1] += L * mx
+                grp[2] += L * my
+                grp[3] = grp[3] + L * (u if u @ grp[3] >= 0 else -u)
+                break
+        else:
+            groups.append([L, L * mx, L * my, L * u])
+    out = [(segment_angle(0.0, 0.0, g_[3][0], g_[3][1]), float(g_[1] / g_[0]),
+            float(g_[2] / g_[0]), float(g_[0])) for g_ in groups]
+    return sorted(out, key=lambda t: -t[3])
+
+
+def _local_peaks(r: np.ndarray, floor: float, k: int, cap: int):
+    """(value, x, y) of the local maxima of ``r`` over a k x k window above ``floor``."""
+    k = max(3, int(k) | 1)
+    peak = (r >= cv2.dilate(r, np.ones((k, k), np.uint8))) & (r >= floor)
+    ys, xs = np.nonzero(peak)
+    if xs.size > cap:
+        top = np.argpartition(-r[ys, xs], cap)[:cap]
+        ys, xs = ys[top], xs[top]
+    return [(float(r[y, x]), int(x), int(y)) for y, x in zip(ys, xs)]
+
+
+def match_template_multiscale(scene, template, scales, *, work_width: int = 320,
+                              polarity: str = "either", floor: float = 0.3,
+                              max_results: int = 10, overlap: float = 0.5):
+    """Multi-scale ``cv2.matchTemplate`` (TM_CCOEFF_NORMED): ``(score, x, y,
+    scale)`` best first, ``(x, y)`` the template centre in full-resolution
+    pixels, ``scale`` the template's size relative to ``template`` at full
+    resolution.
+
+    The grey scene is shrunk (INTER_AREA) to ``work_width`` px wide (never
+    enlarged) and the template resized to each of ``scales`` times that
+    factor (templates under 4 px or larger than the scene skipped).
+    ``polarity``: "bright" (the template as given), "dark" (inverted: the
+    negated correlation) or "either" (its absolute value). Local maxima
+    above ``floor`` (at most 50 per scale), then greedy non-maximum
+    suppression over all scales: a match is dropped when its centre lies
+    within ``overlap`` x the smaller of the two templates' sides of a better
+    one.
+
+    >>> import numpy as np, cv2
+    >>> t = np.full((41, 41), 30, np.uint8); _ = cv2.circle(t, (20, 20), 12, 230, -1)
+    >>> img = np.full((240, 320), 40, np.uint8); _ = cv2.circle(img, (200, 100), 24, 220, -1)
+    >>> s, x, y, sc = match_template_multiscale(img, t, [1.0, 1.5, 2.0])[0]
+    >>> round(x), round(y), sc
+    (200, 100, 2.0)
+    """
+    g = grey(scene)
+    h, w = g.shape
+    f = min(1.0, work_width / float(w))
+    if f < 1.0:
+        g = cv2.resize(g, (max(1, round(w * f)), max(1, round(h * f))),
+                       interpolation=cv2.INTER_AREA)
+    g = g.astype(np.float32)
+    t0 = grey(template).astype(np.float32)
+    th0, tw0 = t0.shape
+    found = []
+    for s in scales:
+        tw, th = round(tw0 * s * f), round(th0 * s * f)
+        if min(tw, th) < 4 or tw > g.shape[1] or th > g.shape[0]:
+            continue
+        t = cv2.resize(t0, (tw, th),
+                       interpolation=cv2.INTER_AREA if s * f < 1 else cv2.INTER_LINEAR)
+        if float(t.std()) < 1e-3:
+            continue
+        r = cv2.matchTemplate(g, t, cv2.TM_CCOEFF_NORMED)
+        if polarity == "either":
+            r = np.abs(r)
+        elif polarity == "dark":
+            r = -r
+        side = min(tw, th)
+        for v, x, y in _local_peaks(r, floor, side // 2, 50):
+            cx = (x + (tw - 1) / 2.0 + 0.5) / f - 0.5
+            cy = (y + (th - 1) / 2.0 + 0.5) / f - 0.5
+            found.append((v, cx, cy, float(s), side / f))
+    found.sort(key=lambda t_: -t_[0])
+    kept = []
+    for v, x, y, s, side in found:
+        if all(math.hypot(x - kx, y - ky) >= overlap * min(side, ks)
+               for _, kx, ky, _, ks in kept):
+            kept.append((v, x, y, s, side))
+            if len(kept) >= max_results:
+                break
+    return [(v, x, y, s) for v, x, y, s, _ in kept]
+
+
+def _ght_worker_opts(conn, opts):
+    """:func:`_ght_worker` with some of Guil's settings replaced (``opts``:
+    canny (low, high), angle_thresh, scale_thresh, pos_thresh, scale_step)."""
+    global GHT_CANNY, GHT_SCALE_STEP
+    GHT_CANNY = tuple(opts.get("canny", GHT_CANNY))      # this worker process only
+    GHT_SCALE_STEP = float(opts.get("scale_step", GHT_SCALE_STEP))
+    make = _ght_make
+
+    def patched(scale_range, angle_range):
+        g = make(scale_range, angle_range)
+        g.setAngleThresh(int(opts.get("angle_thresh", 1500)))
+        g.setScaleThresh(int(opts.get("scale_thresh", 50)))
+        g.setPosThresh(int(opts.get("pos_thresh", 10)))
+        return g
+
+    globals()["_ght_make"] = patched
+    _ght_worker(conn)
+
+
+class GHTGuilOpts(GHTGuil):
+    """:class:`GHTGuil` with its Canny thresholds, vote thresholds and scale
+    step set per instance (``canny=(lo, hi)``, ``angle_thresh``,
+    ``scale_thresh``, ``pos_thresh``, ``scale_step``), e.g. to tune them;
+    the defaults are :class:`GHTGuil`'s. The settings change only in the
+    worker process.
+
+    >>> g = GHTGuilOpts(canny=(30, 90), pos_thresh=5); g.opts["canny"]
+    (30, 90)
+    """
+
+    def __init__(self, timeout: float = 5.0, downscale: float = GHT_DOWNSCALE, **opts):
+        super().__init__(timeout, downscale)
+        self.opts = dict(opts)
+
+    def _start(self):
+        a, b = self._ctx.Pipe()
+        self._proc = self._ctx.Process(target=_ght_worker_opts, args=(b, self.opts), daemon=True)
+        self._proc.start()
+        self._conn = a
+        if self._template is not None:
+            self._send_template()

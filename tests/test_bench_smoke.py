@@ -183,3 +183,74 @@ def test_real_pairs_reference_rule():
     proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True,
                           text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr[-2000:]
+
+
+def test_colour_benchmark_quick(tmp_path):
+    """bench/bench_colour.py --quick: the grey search always runs (the colour one when
+    Config has it), every table is there, the counts add up, and grey images are
+    searched alike with and without colour."""
+    out = tmp_path / "colour.md"
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), env.get("PYTHONPATH", "")])
+    proc = subprocess.run([sys.executable, str(ROOT / "bench" / "bench_colour.py"), "--quick",
+                           "--out", str(out)], cwd=ROOT, env=env, capture_output=True, text=True,
+                          timeout=240)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    text = out.read_text()
+    assert text.strip() == proc.stdout.strip()
+    assert "Machine:" in text and "Command:" in text and "Date:" in text
+    has_colour = "colour (Config(colour=True))" in text.split("Variants that ran:", 1)[1]
+    head = _rows(_section(text, "## Headline (test part)"))
+    assert [r[0] for r in head[1:]] == (["grey", "colour"] if has_colour else ["grey"])
+    for r in head[1:]:
+        k, n = (int(v) for v in re.search(r"\((\d+)/(\d+)\)", r[1]).groups())
+        assert n == 4 and 0 <= k <= n, r            # --quick: one test scene per marker kind
+        assert r[-1] in ("met", "**missed**")
+        for v in _percentages(r[1:6]):
+            assert 0.0 <= v <= 1.0
+    for title in ("## By marker kind and water", "## By distance", "## Grey contrast at the border",
+                  "## How the best answer went",
+                  "## Success by the grey step", "## Tune part"):
+        assert len(_rows(_section(text, title))) >= 2, title
+    grey = _section(text, "## Grey images")
+    if has_colour:
+        assert "in 4 of 4 grey images (as required)" in grey, grey
+        agree = {r[0]: int(r[1]) for r in _rows(_section(text, "## Which scenes"))[1:]}
+        assert sum(agree.values()) == 4
+
+
+def test_robosub_benchmark_quick(tmp_path):
+    """bench/bench_robosub.py --quick: the split named, every task's table with
+    seahough and its peers, rates in [0, 1], counts that add up."""
+    if shared_data_dir() is None:
+        pytest.skip("real data (../shared/data) is not present beside this checkout")
+    out = tmp_path / "robosub.md"
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), env.get("PYTHONPATH", "")])
+    proc = subprocess.run([sys.executable, str(ROOT / "bench" / "bench_robosub.py"), "--quick",
+                           "--out", str(out)], cwd=ROOT, env=env, capture_output=True, text=True,
+                          timeout=240)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    text = out.read_text()
+    assert text.strip() == proc.stdout.strip()
+    assert "Machine:" in text and "Command:" in text and "Date:" in text
+    assert "tune part = frames 100-999 and 1401-1469; test part = frames 1000-1400" in text
+    targets = _rows(_section(text, "## Targets"))[1:]
+    assert len(targets) == 12 and all(r[-1] in ("met", "**missed**") for r in targets)
+    peers_of = {"## Buoys": ("HoughCircles", "HoughCircles ALT", "matchTemplate"),
+                "## Gate posts": ("HoughLinesP", "matchTemplate"),
+                "## The gate": ("GeneralizedHoughGuil", "matchTemplate")}
+    for title, names in peers_of.items():
+        rows = _rows(_section(text, title))
+        head, body = rows[0], [r for r in rows[1:] if len(r) == len(rows[0])]
+        col = {h: i for i, h in enumerate(head)}
+        methods = [r[0] for r in body]
+        assert {"seahough (defaults)", "seahough (tuned)", *names} <= set(methods), methods
+        for r in body:
+            m = re.match(r"(\d+) % \((\d+)/(\d+)\)", r[col["test recall"]])
+            assert m and int(m.group(2)) <= int(m.group(3)), r
+            assert abs(int(m.group(1)) - 100 * int(m.group(2)) / int(m.group(3))) <= 0.5, r
+            false, photos = re.search(r"\((\d+)/(\d+)\)", r[col["test false / image"]]).groups()
+            assert int(r[col["of which on other props"]]) <= int(false), r
+            assert photos == "3", r                           # the quick run's 3 test photos
+            assert float(r[col["test ms"]]) > 0, r
