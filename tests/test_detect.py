@@ -266,3 +266,16 @@ def test_polarity_bright_dark_or_either():
     # an image pattern taken from a bright plate finds the dark one when inverted
     found = seahough.Detector(seahough.Pattern.from_image(pattern_img, polarity="inverted")).detect(scene)
     assert found and math.hypot(found[0].x - 300, found[0].y - 220) < 1.0
+
+
+def test_a_second_post_is_refined_not_lost_behind_the_first():
+    """A long post puts a ridge of accumulator peaks along itself; the second
+    gate post of RoboSub frame 538 (x ~ 226) used to get no candidate at all."""
+    img = cv2.imread(str(data_path("objects", "robosub_transdec", "images", "538.jpg")))
+    det = seahough.Detector(seahough.Pattern.line(120, 12, polarity="either"), (0.5, 2.0),
+                            (60.0, 120.0), max_nfa=math.inf, min_score=0.0)
+    r = det.search(img)
+    xs = [c.fit.pose.tx / r.factor for c in r.candidates]
+    assert any(abs(x - 70) < 15 for x in xs) and any(abs(x - 226) < 25 for x in xs), xs
+    found = [d.x for d in r.detections]
+    assert any(abs(x - 70) < 10 for x in found) and any(abs(x - 226) < 10 for x in found)

@@ -220,6 +220,43 @@ def peaks(best_val: np.ndarray, radius: int, n: int):
     return ys[order], xs[order], v[order]
 
 
+def _one_peak_per_line(ctx: SearchContext, votes: Votes, ys, xs, vs):
+    """The peaks of a line pattern, each on a line of its own: a long rope or
+    post puts a ridge of peaks along itself (its position along the line is
+    undetermined), which would take every candidate. The peaks are put in
+    the order they are refined in: the two highest, then the highest of each
+    other line (direction within 5 degrees, within one translation bin), then
+    the rest, so that a second rope or post is refined too."""
+    p, bins = ctx.pattern, ctx.bins
+    if len(ys) < 2:
+        return ys, xs, vs
+    tx = bins.tx0 + (xs + 1) * bins.step
+    ty = bins.ty0 + (ys + 1) * bins.step
+    a = np.asarray(bins.angles)[votes.best_d[ys, xs]]
+    near = bins.step   # (a pose half a width across, on one border, is another seed)
+    tol = math.radians(5.0)
+    keep: list[int] = []
+    for i in range(len(ys)):
+        same = False
+        for j in keep:
+            da = abs((a[i] - a[j] + 0.5 * math.pi) % math.pi - 0.5 * math.pi)
+            if da > tol:
+                continue
+            # distance from peak i to the line of peak j (direction (cos, -sin))
+            if abs((tx[i] - tx[j]) * -math.sin(a[j]) - (ty[i] - ty[j]) * math.cos(a[j])) <= near:
+                same = True
+                break
+        if not same:
+            keep.append(i)
+    # the two highest first (as for any pattern: refinement may need the
+    # second seed on the best line), then one per other line, then the rest
+    first = [0, 1]
+    order = first + [i for i in keep if i not in first]
+    order += [i for i in range(len(ys)) if i not in order]
+    k = np.asarray(order, int)
+    return ys[k], xs[k], vs[k]
+
+
 def _seed_cells(ctx: SearchContext, votes: Votes):
     """The accumulator cells to refine: ``(y, x, height, is_peak)``."""
     cfg, p, bins, tune = ctx.config, ctx.pattern, ctx.bins, ctx.config.search
@@ -230,7 +267,10 @@ def _seed_cells(ctx: SearchContext, votes: Votes):
     else:
         radius = int(np.clip(round(0.25 * p.extent * s0 * ctx.factor / bins.step), 1,
                              tune.peak_radius))
-    ys, xs, vs = peaks(best_val, radius, cfg.n_candidates)
+    if p.is_line:   # (many maxima lie along one line: look further down the list)
+        ys, xs, vs = _one_peak_per_line(ctx, votes, *peaks(best_val, radius, 8 * cfg.n_candidates))
+    else:
+        ys, xs, vs = peaks(best_val, radius, cfg.n_candidates)
     known = bins.scale_known and bins.angle_known
     n_peaks = ctx.max_results + 1 if known else cfg.n_candidates + 4
     cells = []
