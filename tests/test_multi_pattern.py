@@ -152,3 +152,35 @@ def test_survey_rows_name_their_pattern(tmp_path):
     text = json.dumps(manifest)
     assert '"patterns": {"box": {"pattern": {"kind": "rectangle"' in text
     assert '"disc": {"pattern": {"kind": "circle"' in text
+
+
+def test_a_disc_nfa_counts_the_rotations_asked_for():
+    img = _scene()
+    any_turn = seahough.Detector(P.circle(20), angle_range=(0.0, 360.0)).detect(img)[0]
+    one_turn = seahough.Detector(P.circle(20), angle_range=(0.0, 0.0)).detect(img)[0]
+    assert (any_turn.x, any_turn.y, any_turn.score) == (one_turn.x, one_turn.y, one_turn.score)
+    assert any_turn.nfa > 10 * one_turn.nfa
+    # a disc of known scale is the 2-D case whatever its angle range
+    det = seahough.Detector(P.circle(20), scale_range=(1.5, 1.5))
+    assert det._n_keypoints() == det.config.n_keypoints_2d
+
+
+def test_cli_one_named_pattern_and_curve_alone(tmp_path, capsys):
+    path = tmp_path / "scene.png"
+    cv2.imwrite(str(path), _scene())
+    assert _cli(["detect", "disc=circle:20", str(path), "--json", "-q"]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    assert {d["pattern"] for d in rec["detections"]} == {"disc"}
+    assert _cli(["detect", "a=curve:8+circle:20", str(path)]) == 2
+    assert "curve:WIDTH is searched alone" in capsys.readouterr().err
+    for opt in (["--scale-range", "1", "2"], ["--min-score", "0.9"], ["--colour"]):
+        assert _cli(["detect", "curve:8", str(path), *opt]) == 2
+        err = capsys.readouterr().err
+        assert opt[0] in err and "does not apply to curves" in err and "Traceback" not in err
+
+
+def test_crisp_marker_photo_has_long_borders():
+    img = np.zeros((80, 80), np.uint8)
+    cv2.circle(img, (40, 40), 25, 255, -1)          # drawn without anti-aliasing
+    assert P.from_image(img).has_long_borders()     # as its features see it: blurred
+    assert not P.from_image(img).has_long_borders(seahough.Config(pattern_blur=0.0))

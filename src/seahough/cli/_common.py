@@ -3,6 +3,8 @@ progress bars, range and number parsing, and pattern specs."""
 
 from __future__ import annotations
 
+import inspect
+
 import json
 import math
 import sys
@@ -231,9 +233,22 @@ def make_detector(pattern, scale_range, angle_range, max_results, min_score, min
     config = Config(**cfg_kw)
     kind, sep, rest = pattern.partition(":")
     if sep and kind.strip().lower() == "curve" and not Path(pattern).is_file():
-        if mask is not None:
-            raise click.BadParameter("--mask applies to image patterns, not curves",
-                                     param_hint="--mask")
+        from ..core.detector import Detector as _D
+
+        defaults = {k: v.default for k, v in inspect.signature(_D.__init__).parameters.items()}
+        unused = [name for name, given, default in (
+            ("--scale-range", tuple(scale_range), tuple(defaults["scale_range"])),
+            ("--angle-range", tuple(angle_range), tuple(defaults["angle_range"])),
+            ("--min-score", min_score, defaults["min_score"]),
+            ("--min-confidence", min_confidence, defaults["min_confidence"]),
+            ("--mask", mask, None), ("--colour", bool(colour), False)) if given != default]
+        if unused:
+            raise click.BadParameter(f"{unused[0]} does not apply to curves (curve:WIDTH "
+                                     "searches widths 0.5-1.5x WIDTH at any angle, grey)",
+                                     param_hint=unused[0])
+        if max_results > 100:
+            raise click.BadParameter(f"{max_results}: at most 100 curves an image",
+                                     param_hint="--max-results")
         return CurveSearch(_curve_width(pattern, rest), _SHAPE_POLARITY[polarity or "bright"],
                            config, max_results, max_nfa)
     named = parse_patterns(pattern)
@@ -289,9 +304,15 @@ def parse_patterns(spec: str):
     [('gate', 'polyline:6:0,80,0,0,60,0,60,80'), ('circle:16', 'circle:16')]
     >>> parse_patterns("rect:60,40") is None
     True
+    >>> parse_patterns("buoy=circle:16")
+    [('buoy', 'circle:16')]
     """
-    if "+" not in spec or Path(spec).is_file():
+    if Path(spec).is_file():
         return None
+    if "+" not in spec:   # one pattern: named only as NAME=SPEC with a plain name
+        name, eq, rest = spec.partition("=")
+        if not eq or not name.strip() or any(c in name for c in ":/\\.,"):
+            return None
     named = []
     for part in spec.split("+"):
         name, eq, rest = part.partition("=")
@@ -301,6 +322,9 @@ def parse_patterns(spec: str):
         if not name or not rest:
             raise click.BadParameter(f"{spec!r}: expected [NAME=]SPEC+[NAME=]SPEC..., got an "
                                      f"empty part {part!r}", param_hint="PATTERN")
+        if rest.lower().startswith("curve:"):
+            raise click.BadParameter(f"{spec!r}: curve:WIDTH is searched alone, not with "
+                                     "other patterns", param_hint="PATTERN")
         if name in dict(named):
             raise click.BadParameter(f"{spec!r}: the name {name!r} is given twice",
                                      param_hint="PATTERN")

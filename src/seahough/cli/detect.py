@@ -143,8 +143,12 @@ def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir,
         ac = out_dir / f"{stem}_accumulator.png"
         ed = out_dir / f"{stem}_edges.png"
         plot.plot_detections(img, dets, ov, pattern=pat, title=head, max_width=max_width)
-        plot.plot_accumulator(res.planes, dets, ac, title=f"{Path(name).name}: accumulator",
-                              note=res.note)
+        acc_dets, acc_title = dets, f"{Path(name).name}: accumulator"
+        if detector.parts:   # the planes are the first pattern's: its detections only
+            first = next(iter(detector.parts))
+            acc_dets = [d for d in dets if d.pattern == first]
+            acc_title += f" of pattern {first}"
+        plot.plot_accumulator(res.planes, acc_dets, ac, title=acc_title, note=res.note)
         plot.plot_edges(img, res.features, ed, title=f"{Path(name).name}: what the detector sees")
         written = {"overlay": str(ov), "accumulator": str(ac), "edges": str(ed)}
     return res, img.shape[:2], ms, written

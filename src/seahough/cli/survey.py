@@ -96,7 +96,8 @@ def detect(pattern, inputs, out, workers, scheduler, batch_size, as_json, quiet,
                           scale, angle, score, confidence, nfa (number
                           of false alarms), matrix (6 numbers, 2x3
                           row-major), votes, kind, line_angle,
-                          line_offset, flags
+                          line_offset, flags, pattern (its name, for
+                          several patterns: NAME=SPEC+NAME=SPEC)
       survey.json         the settings, the inputs and the counts
     Results are saved in shards as they come (parts/): run the same
     command again to continue an interrupted survey (nothing is searched

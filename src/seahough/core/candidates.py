@@ -193,6 +193,9 @@ class SearchContext:
     min_score: float
     compare: PoseComparison
     max_nfa: float = math.inf
+    #: the rotations the caller asked for, when the search tried fewer (a disc
+    #: is searched at one): the number of false alarms still counts them
+    asked_angles: tuple | None = None
 
     @property
     def scale_known(self) -> bool:

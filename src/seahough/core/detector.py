@@ -210,7 +210,7 @@ class Detector:
                             angles, self.max_results, self.min_score,
                             PoseComparison(p, pf, bins.step, self.scale_range,
                                            angles, cfg.search.overlap),
-                            self.max_nfa)
+                            self.max_nfa, self.angle_range if angles != self.angle_range else None)
         cands = find_candidates(ctx, votes)
         t3 = time.perf_counter()
         timings["peaks_refine"] = t3 - t2
@@ -234,8 +234,8 @@ class Detector:
     def _n_keypoints(self) -> int | None:
         """How many key points a search takes (None: the Config's default)."""
         n = self.config.n_keypoints_2d
-        known = (self.scale_range[0] == self.scale_range[1]
-                 and self.angle_range[0] == self.angle_range[1])
+        a0, a1 = self._angles()
+        known = self.scale_range[0] == self.scale_range[1] and a0 == a1
         return n if known and n is not None else None
 
     def _angles(self) -> tuple:

@@ -412,7 +412,11 @@ class Pattern:
             return not self.is_frame
         key = ("long borders", config.chain_length, config.min_gradient, config.colour)
         if key not in self._cache:
-            grad = compute_gradients(np.ascontiguousarray(self._edges_from(config), np.float32))
+            img = np.ascontiguousarray(self._edges_from(config), np.float32)
+            if config.pattern_blur > 0:   # (as its features see it: a crisp staircase is not)
+                img = cv2.GaussianBlur(img, (0, 0), config.pattern_blur,
+                                       borderType=cv2.BORDER_REPLICATE)
+            grad = compute_gradients(img)
             edges = find_edge_points(grad, config.min_gradient)
             if self._edge_mask is not None and len(edges):
                 keep = self._edge_mask[edges.iy, edges.ix]

@@ -157,7 +157,11 @@ def _nearest_on(seg, x, y) -> tuple[float, float]:
 
 def _det_label(d) -> str:
     """``"score 0.87 · conf 0.64 · s 1.23 · 45.0°"`` (angles wrapped after
-    rounding: 359.98 is written 0.0)."""
+    rounding: 359.98 is written 0.0), after the pattern's name for a search
+    of several patterns."""
+    name = getattr(d, "pattern", "")
+    if name:
+        return f"{name} · " + _det_label(type(d)(**{**d.__dict__, "pattern": ""}))
     if d.kind == "line" and d.line_angle is not None:
         return (f"score {d.score:.2f} · conf {d.confidence:.2f} · "
                 f"line {format_angle(d.line_angle, 1, 180.0)}° · "
