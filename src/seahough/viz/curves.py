@@ -7,9 +7,8 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from ._figure import COLOURS, _OUTLINE, _as_display, _figure, _finish, _show
-from .detections import (_MARGINS, _check_max_width, _free_corners, _label_list, _place_label,
-                         detections_size)
+from ._figure import COLOURS, _OUTLINE, _finish
+from .detections import _free_corners, _image_figure, _label_list, _place_label
 
 
 def _borders(points: np.ndarray, half: float) -> tuple[np.ndarray, np.ndarray]:
@@ -67,15 +66,7 @@ def plot_curves(image, curves, path=None, *, title=None, max_width=None) -> Figu
     >>> tuple(int(v) for v in fig.get_size_inches() * fig.dpi)
     (1000, 775)
     """
-    max_width = _check_max_width(max_width)
-    disp, colour = _as_display(image)
-    h, w = disp.shape[:2]
-    fw, fh = detections_size((h, w), max_width=max_width)
-    fig = _figure(fw, fh)
-    left, right, bottom, top = _MARGINS
-    iw, ih = fw - left - right, fh - bottom - top
-    ax = fig.add_axes([left / fw, bottom / fh, iw / fw, ih / fh])
-    _show(ax, disp, colour, (iw, ih))
+    fig, ax, _, _, (w, h), _ = _image_figure(image, max_width)
     ax.set_xlabel("x (px)")
     ax.set_ylabel("y (px)")
     curves = list(curves or [])

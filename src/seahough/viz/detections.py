@@ -468,6 +468,22 @@ def _notes_below(fig, items, pattern, top_left, width, nf_size):
         _pattern_beside(fig, pattern, x, y, side if pw >= ph else side * pw / ph)
 
 
+def _image_figure(image, max_width):
+    """The figure of an image drawn as :func:`plot_detections` draws it:
+    ``(fig, ax, disp, colour, (w, h), (iw, ih))``, ``(iw, ih)`` the image
+    box in px."""
+    max_width = _check_max_width(max_width)
+    disp, colour = _as_display(image)
+    h, w = disp.shape[:2]
+    fw, fh = detections_size((h, w), max_width=max_width)
+    fig = _figure(fw, fh)
+    left, right, bottom, top = _MARGINS
+    iw, ih = fw - left - right, fh - bottom - top
+    ax = fig.add_axes([left / fw, bottom / fh, iw / fw, ih / fh])
+    _show(ax, disp, colour, (iw, ih))
+    return fig, ax, disp, colour, (w, h), (iw, ih)
+
+
 def plot_detections(image, detections, path=None, *, pattern=None, title=None,
                     max_width=None) -> Figure:
     """The image with each detection's outline, origin and numbers.
@@ -532,15 +548,7 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
     >>> tuple(int(v) for v in fig.get_size_inches() * fig.dpi)
     (1000, 775)
     """
-    max_width = _check_max_width(max_width)
-    disp, colour = _as_display(image)
-    h, w = disp.shape[:2]
-    fw, fh = detections_size((h, w), max_width=max_width)
-    fig = _figure(fw, fh)
-    left, right, bottom, top = _MARGINS
-    iw, ih = fw - left - right, fh - bottom - top
-    ax = fig.add_axes([left / fw, bottom / fh, iw / fw, ih / fh])
-    _show(ax, disp, colour, (iw, ih))
+    fig, ax, disp, colour, (w, h), (iw, ih) = _image_figure(image, max_width)
     gray = None
     if any(d.kind == "line" for d in detections or []):
         gray = cv2.cvtColor(disp, cv2.COLOR_RGB2GRAY) if colour else disp
