@@ -1,4 +1,5 @@
-"""Shared helpers of the benchmark scripts: single-thread setup, machine line."""
+"""Shared helpers of the benchmark scripts: single-thread setup, machine line,
+the seabed photos' tune/test split, writing a page."""
 
 from __future__ import annotations
 
@@ -6,6 +7,7 @@ import ctypes
 import os
 import platform
 import sys
+from pathlib import Path
 
 for _v in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_v, "1")
@@ -65,3 +67,27 @@ def steady_allocator() -> str:
             f"{'unchanged' if mmap is None else f'{mmap >> 20} MiB'}, M_TRIM_THRESHOLD "
             f"{'unchanged' if not trim else '1024 MiB'}: freed arrays are reused, as in the "
             "steady state of a long run, whatever ran before)")
+
+
+def seabed_split(base):
+    """(tune, test) real seabed photos of the shared data folder ``base``
+    (bench_nfa.py, bench_colour.py): each sequence cut in two, so that both
+    parts hold every kind of scene (a first split by sequence tuned on the
+    quiet Sparus and Skerki frames alone, and the wreck and sand of the test
+    part then showed 15 times the promised false alarms: docs/nfa.md)."""
+    seq = Path(base) / "sequences"
+    sparus = sorted((seq / "sparus_auv_seabed").glob("*.png"))
+    aqualoc = sorted((seq / "aqualoc_amphorae_wreck").glob("*.png"))
+    skerki = sorted((seq / "skerki_mud_pair").glob("*.png"))
+    dtu = sorted((seq / "dtu_seabed_pair").glob("*.png"))
+    tune = sparus[0::2] + aqualoc[: len(aqualoc) // 2] + skerki[:1] + dtu[:1]
+    test = (sparus[1::2] + aqualoc[len(aqualoc) // 2:] + skerki[1:] + dtu[1:]
+            + sorted((Path(base) / "seabed").glob("*.jpg")))
+    return tune, test
+
+
+def write_page(text: str, out) -> None:
+    """Write a benchmark's markdown page to ``out`` (folders made), and say so on stderr."""
+    Path(out).parent.mkdir(parents=True, exist_ok=True)
+    Path(out).write_text(text + "\n")
+    print(f"written to {out}", file=sys.stderr, flush=True)

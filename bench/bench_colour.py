@@ -49,7 +49,8 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import command, machine, steady_allocator  # noqa: E402  (single thread first)
+from _common import (  # noqa: E402  (single thread first)
+    command, machine, seabed_split, steady_allocator, write_page)
 
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
@@ -93,18 +94,12 @@ def colour_config():
 
 
 def split_photos():
-    """(tune, test) seabed photos of the shared data, or procedural seabed when absent."""
+    """(tune, test) seabed photos of the shared data (:func:`_common.seabed_split`, as
+    bench_nfa.py cuts them), or procedural seabed when absent."""
     base = shared_data_dir()
     if base is None:
         return ["procedural"], ["procedural"]
-    seq = base / "sequences"
-    sparus = sorted((seq / "sparus_auv_seabed").glob("*.png"))
-    aqualoc = sorted((seq / "aqualoc_amphorae_wreck").glob("*.png"))
-    skerki = sorted((seq / "skerki_mud_pair").glob("*.png"))
-    dtu = sorted((seq / "dtu_seabed_pair").glob("*.png"))
-    tune = sparus[0::2] + aqualoc[: len(aqualoc) // 2] + skerki[:1] + dtu[:1]
-    test = (sparus[1::2] + aqualoc[len(aqualoc) // 2:] + skerki[1:] + dtu[1:]
-            + sorted((base / "seabed").glob("*.jpg")))
+    tune, test = seabed_split(base)
     return tune or ["procedural"], test or ["procedural"]
 
 
@@ -555,9 +550,7 @@ def main(argv=None) -> str:
                  "answer of its search (magenta).\n")
     print(text)
     if out:
-        Path(out).parent.mkdir(parents=True, exist_ok=True)
-        Path(out).write_text(text + "\n")
-        log(f"written to {out}")
+        write_page(text, out)
     return text
 
 

@@ -43,7 +43,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import command, machine  # noqa: E402  (sets single-thread first)
+from _common import command, machine, seabed_split  # noqa: E402  (sets single-thread first)
 
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
@@ -94,22 +94,6 @@ def crops(img: np.ndarray, size=(480, 640), n=4):
                 k += 1
 
 
-def split_photos(base: Path):
-    """(tune, test) real seabed photos: each sequence cut in two, so that
-    both parts hold every kind of scene (a first split by sequence tuned on
-    the quiet Sparus and Skerki frames alone, and the wreck and sand of the
-    test part then showed 15 times the promised false alarms: docs/nfa.md)."""
-    seq = base / "sequences"
-    sparus = sorted((seq / "sparus_auv_seabed").glob("*.png"))
-    aqualoc = sorted((seq / "aqualoc_amphorae_wreck").glob("*.png"))
-    skerki = sorted((seq / "skerki_mud_pair").glob("*.png"))
-    dtu = sorted((seq / "dtu_seabed_pair").glob("*.png"))
-    tune = sparus[0::2] + aqualoc[: len(aqualoc) // 2] + skerki[:1] + dtu[:1]
-    test = (sparus[1::2] + aqualoc[len(aqualoc) // 2:] + skerki[1:] + dtu[1:]
-            + sorted((base / "seabed").glob("*.jpg")))
-    return tune, test
-
-
 def images(quick: bool):
     """(group, split, label, loader, pattern names) of every object-free image."""
     base = shared_data_dir()
@@ -124,7 +108,7 @@ def images(quick: bool):
                       MARKER_PATTERNS))
     if base is None:
         return items
-    tune_real, test_real = split_photos(base)
+    tune_real, test_real = seabed_split(base)
     if quick:
         tune_real, test_real = tune_real[:1], test_real[:1]
 

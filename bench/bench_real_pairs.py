@@ -50,7 +50,8 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import command, machine, steady_allocator  # noqa: E402  (single thread first)
+from _common import (  # noqa: E402  (single thread first)
+    command, machine, steady_allocator, write_page)
 
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
@@ -555,9 +556,7 @@ def main(argv=None) -> str:
     print(text)
     out = args.out or (str(DOC) if args.write else None)
     if out:
-        Path(out).parent.mkdir(parents=True, exist_ok=True)
-        Path(out).write_text(text + "\n")
-        log(f"written to {out}")
+        write_page(text, out)
     return text
 
 

@@ -53,7 +53,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import command, machine, steady_allocator  # noqa: E402  (single thread first)
+from _common import (  # noqa: E402  (single thread first)
+    command, machine, steady_allocator, write_page)
 
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
@@ -1097,9 +1098,7 @@ def main(argv=None) -> str:
     print(text)
     out = args.out or (str(DOC) if args.write else None)
     if out:
-        Path(out).parent.mkdir(parents=True, exist_ok=True)
-        Path(out).write_text(text + "\n")
-        log(f"written to {out}")
+        write_page(text, out)
     pic = [p for p in photos if p.number == PICTURE_FRAME]
     if args.write and pic:
         draw(pic[0], results, PICTURE)

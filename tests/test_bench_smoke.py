@@ -26,17 +26,22 @@ SECTIONS = {
 }
 
 
-@pytest.fixture(scope="module")
-def quick_report(tmp_path_factory):
-    out = tmp_path_factory.mktemp("bench") / "report.md"
+def _quick_page(script: Path, out: Path) -> str:
+    """Run ``script --quick --out out`` with this checkout's package; the page
+    it wrote, checked to be what it printed."""
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), env.get("PYTHONPATH", "")])
-    proc = subprocess.run([sys.executable, str(RUN), "--quick", "--out", str(out)], cwd=ROOT,
+    proc = subprocess.run([sys.executable, str(script), "--quick", "--out", str(out)], cwd=ROOT,
                           env=env, capture_output=True, text=True, timeout=240)
     assert proc.returncode == 0, proc.stderr[-3000:]
     text = out.read_text()
     assert text.strip() == proc.stdout.strip()
     return text
+
+
+@pytest.fixture(scope="module")
+def quick_report(tmp_path_factory):
+    return _quick_page(RUN, tmp_path_factory.mktemp("bench") / "report.md")
 
 
 def _section(text: str, title: str) -> str:
@@ -128,14 +133,7 @@ def test_real_pairs_benchmark_quick(tmp_path):
     if shared_data_dir() is None:
         pytest.skip("real data (../shared/data) is not present beside this checkout")
     out = tmp_path / "real_pairs.md"
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), env.get("PYTHONPATH", "")])
-    proc = subprocess.run([sys.executable, str(ROOT / "bench" / "bench_real_pairs.py"), "--quick",
-                           "--out", str(out)], cwd=ROOT, env=env, capture_output=True, text=True,
-                          timeout=240)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    text = out.read_text()
-    assert text.strip() == proc.stdout.strip()
+    text = _quick_page(ROOT / "bench" / "bench_real_pairs.py", out)
     assert "Machine:" in text and "Command:" in text and "Date:" in text
     assert "Split: tune part = sparus_auv_seabed, skerki_mud_pair" in text
     targets = _rows(_section(text, "## Targets"))[1:]
@@ -190,14 +188,7 @@ def test_colour_benchmark_quick(tmp_path):
     Config has it), every table is there, the counts add up, and grey images are
     searched alike with and without colour."""
     out = tmp_path / "colour.md"
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), env.get("PYTHONPATH", "")])
-    proc = subprocess.run([sys.executable, str(ROOT / "bench" / "bench_colour.py"), "--quick",
-                           "--out", str(out)], cwd=ROOT, env=env, capture_output=True, text=True,
-                          timeout=240)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    text = out.read_text()
-    assert text.strip() == proc.stdout.strip()
+    text = _quick_page(ROOT / "bench" / "bench_colour.py", out)
     assert "Machine:" in text and "Command:" in text and "Date:" in text
     has_colour = "colour (Config(colour=True))" in text.split("Variants that ran:", 1)[1]
     head = _rows(_section(text, "## Headline (test part)"))
@@ -225,14 +216,7 @@ def test_robosub_benchmark_quick(tmp_path):
     if shared_data_dir() is None:
         pytest.skip("real data (../shared/data) is not present beside this checkout")
     out = tmp_path / "robosub.md"
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), env.get("PYTHONPATH", "")])
-    proc = subprocess.run([sys.executable, str(ROOT / "bench" / "bench_robosub.py"), "--quick",
-                           "--out", str(out)], cwd=ROOT, env=env, capture_output=True, text=True,
-                          timeout=240)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    text = out.read_text()
-    assert text.strip() == proc.stdout.strip()
+    text = _quick_page(ROOT / "bench" / "bench_robosub.py", out)
     assert "Machine:" in text and "Command:" in text and "Date:" in text
     assert "tune part = frames 100-999 and 1401-1469; test part = frames 1000-1400" in text
     targets = _rows(_section(text, "## Targets"))[1:]

@@ -230,7 +230,7 @@ def _one_peak_per_line(ctx: SearchContext, votes: Votes, ys, xs, vs):
     the order they are refined in: the two highest, then the highest of each
     other line (direction within 5 degrees, within one translation bin), then
     the rest, so that a second rope or post is refined too."""
-    p, bins = ctx.pattern, ctx.bins
+    bins = ctx.bins
     if len(ys) < 2:
         return ys, xs, vs
     tx = bins.tx0 + (xs + 1) * bins.step
@@ -238,25 +238,23 @@ def _one_peak_per_line(ctx: SearchContext, votes: Votes, ys, xs, vs):
     a = np.asarray(bins.angles)[votes.best_d[ys, xs]]
     near = bins.step   # (a pose half a width across, on one border, is another seed)
     tol = math.radians(5.0)
+    # same[i][j]: peak i lies on the line of peak j (direction within tol; its
+    # distance to that line, of direction (cos a, -sin a), within a bin)
+    da = np.abs((a[:, None] - a[None, :] + 0.5 * math.pi) % math.pi - 0.5 * math.pi)
+    off = np.abs((tx[:, None] - tx[None, :]) * -np.sin(a)[None, :]
+                 - (ty[:, None] - ty[None, :]) * np.cos(a)[None, :])
+    same = (da <= tol) & (off <= near)
+    covered = np.zeros(len(ys), bool)   # on the line of a peak kept so far
     keep: list[int] = []
-    for i in range(len(ys)):
-        same = False
-        for j in keep:
-            da = abs((a[i] - a[j] + 0.5 * math.pi) % math.pi - 0.5 * math.pi)
-            if da > tol:
-                continue
-            # distance from peak i to the line of peak j (direction (cos, -sin))
-            if abs((tx[i] - tx[j]) * -math.sin(a[j]) - (ty[i] - ty[j]) * math.cos(a[j])) <= near:
-                same = True
-                break
-        if not same:
+    for i in range(len(ys)):           # greedy, highest first
+        if not covered[i]:
             keep.append(i)
+            covered |= same[:, i]
     # the two highest first (as for any pattern: refinement may need the
     # second seed on the best line), then one per other line, then the rest
-    first = [0, 1]
-    order = first + [i for i in keep if i not in first]
-    order += [i for i in range(len(ys)) if i not in order]
-    k = np.asarray(order, int)
+    kept = np.asarray([i for i in keep if i > 1], int)
+    order = np.concatenate([[0, 1], kept, np.setdiff1d(np.arange(2, len(ys)), kept)])
+    k = order.astype(int)
     return ys[k], xs[k], vs[k]
 
 

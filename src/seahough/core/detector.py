@@ -138,16 +138,12 @@ class Detector:
                                      "with x1 > x0 and y1 > y0")
             search_region = sr
         self.search_region = search_region
-        configs = {id(d.config): d.config for d in self.parts.values()}
-        if config is not None and any(c != self.config for c in configs.values()):
-            raise ParameterError("config: the patterns of one Detector share the image's "
-                                 "features, so their Detectors must have the same Config")
-        if config is None and configs:
-            first = next(iter(configs.values()))
-            if any(c != first for c in configs.values()):
+        if self.parts:   # one Config for all: they share the image's features
+            ref = self.config if config is not None else next(iter(self.parts.values())).config
+            if any(d.config != ref for d in self.parts.values()):
                 raise ParameterError("config: the patterns of one Detector share the image's "
                                      "features, so their Detectors must have the same Config")
-            self.config = first
+            self.config = ref
 
     def detect(self, image) -> list:
         """Detections of the pattern in ``image`` (path or array), best first.

@@ -38,10 +38,7 @@ def extract_features(gray: np.ndarray, factor: float, config: Config,
     grad = compute_gradients(gray, factor, config.equalize)
     edges = find_edge_points(grad, config.min_gradient)
     if mask is not None and len(edges):
-        keep = mask[edges.iy, edges.ix]
-        edges = EdgePoints(*(a[keep] for a in (edges.x, edges.y, edges.angle, edges.magnitude,
-                                                edges.ix, edges.iy)), edges.shape,
-                           None, edges.nx[keep], edges.ny[keep])
+        edges = edges.take(mask[edges.iy, edges.ix])
     index = edges.index_map()
     strength = (local_contrast(edges, grad.magnitude, config.local_window)
                 if config.local_contrast and len(edges) else None)

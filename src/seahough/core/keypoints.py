@@ -43,6 +43,12 @@ class EdgePoints:
     def __len__(self) -> int:
         return int(self.x.shape[0])
 
+    def take(self, keep: np.ndarray) -> "EdgePoints":
+        """The points where ``keep`` (bool or ids) holds, without an index map."""
+        return EdgePoints(*(a[keep] for a in (self.x, self.y, self.angle, self.magnitude,
+                                              self.ix, self.iy)), self.shape, None,
+                          self.nx[keep], self.ny[keep])
+
     def index_map(self, ids: np.ndarray | None = None) -> np.ndarray:
         """int32 image holding each edge point's id at its pixel, -1 elsewhere.
 

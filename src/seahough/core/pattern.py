@@ -22,7 +22,7 @@ from ..errors import ParameterError, PatternError
 from .features import extract_features
 from ..io.images import to_gray
 from . import pattern_io as _pio
-from .keypoints import EdgePoints, chain_share, edge_points_near, find_edge_points
+from .keypoints import chain_share, edge_points_near
 from .preprocess import choose_factor, compute_gradients
 from . import shapes as _shapes
 
@@ -416,14 +416,9 @@ class Pattern:
             if config.pattern_blur > 0:   # (as its features see it: a crisp staircase is not)
                 img = cv2.GaussianBlur(img, (0, 0), config.pattern_blur,
                                        borderType=cv2.BORDER_REPLICATE)
-            grad = compute_gradients(img)
-            edges = find_edge_points(grad, config.min_gradient)
-            if self._edge_mask is not None and len(edges):
-                keep = self._edge_mask[edges.iy, edges.ix]
-                edges = EdgePoints(*(a[keep] for a in (edges.x, edges.y, edges.angle,
-                                                       edges.magnitude, edges.ix, edges.iy)),
-                                   edges.shape, None, edges.nx[keep], edges.ny[keep])
-            share = chain_share(edges, max(config.chain_length, 1.0))
+            f = extract_features(img, 1.0, config.replace(chain_length=0.0),
+                                 mask=self._edge_mask)
+            share = chain_share(f.edges, max(config.chain_length, 1.0), f.index)
             self._cache.setdefault(key, share >= LONG_BORDERS)
         return self._cache[key]
 
