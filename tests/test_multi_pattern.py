@@ -2,7 +2,6 @@
 each detection naming its pattern, the same finds as each pattern alone."""
 
 import json
-import math
 
 import cv2
 import numpy as np

@@ -82,21 +82,24 @@ def test_bad_max_nfa_is_refused_by_name(frame_pair, bad):
         P.motion_from_pattern(pattern, cur, max_nfa=bad)
 
 
-def test_search_pair_does_not_judge_the_nfa_unless_told(frame_pair):
-    """The dead reckoning's searches keep their own decisions: without a
-    max_nfa, an answer at a high NFA (two unrelated frames) is still returned."""
+def test_measure_pair_does_not_judge_the_nfa(frame_pair):
+    """The dead reckoning's searches keep their own decisions: an answer at a
+    high NFA (two unrelated frames) is still returned, with its NFA; only
+    estimate_motion's max_nfa declines it."""
     prev, _, _, _ = frame_pair
     other = sim.negative_scene(prev.shape[:2], seed=77, source="procedural")
     pattern = Pattern.from_frame(seahough.to_gray(prev), config=MOTION_CONFIG)
     h, w = other.shape[:2]
     gray = seahough.to_gray(other)
     region = (0.0, 0.0, float(w), float(h))
-    d = P.search_pair(pattern, gray, (0.8, 1.25), (-30, 30), region, min_score=0.0,
-                      config=MOTION_CONFIG)
+    d = P.measure_pair(pattern, gray, (0.8, 1.25), (-30, 30), region, min_score=0.0,
+                       min_confidence=0.0, config=MOTION_CONFIG)
     assert d is not None and math.isfinite(d.nfa) and d.nfa > 1.0
-    strict = P.search_pair(pattern, gray, (0.8, 1.25), (-30, 30), region, min_score=0.0,
-                           config=MOTION_CONFIG, max_nfa=1.0)
-    assert strict is None
+    assert P.motion_from_pattern(pattern, gray, max_shift=1.0, min_confidence=0.0,
+                                 min_score=0.0) is None
+    loose = P.motion_from_pattern(pattern, gray, max_shift=1.0, min_confidence=0.0,
+                                  min_score=0.0, max_nfa=math.inf)
+    assert loose is not None and loose.nfa > 1.0
 
 
 # ----------------------------------------------------------------------- dead reckoning

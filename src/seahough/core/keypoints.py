@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 
 from . import kernels as K
-from .preprocess import Gradients
+from .preprocess import Gradients, compute_gradients
 
 
 @dataclass
@@ -115,6 +115,63 @@ def edge_points_near(grad: Gradients, x, y, radius: float, min_gradient: float,
     if mask is not None:
         band &= np.asarray(mask, bool).astype(np.uint8)
     return find_edge_points(grad, min_gradient, band)
+
+
+#: Rows of a strip of :func:`edge_points_near_image` (and the rows around
+#: each that its gradients and thinning look at).
+STRIP_ROWS = 256
+_STRIP_MARGIN = 3
+
+
+def edge_points_near_image(gray: np.ndarray, x, y, radius: float, min_gradient: float,
+                           mask: np.ndarray | None = None, equalize: bool = False,
+                           rows: int = STRIP_ROWS) -> EdgePoints:
+    """:func:`edge_points_near` on the full-resolution gradients of ``gray``
+    (float32 grey or BGR), computed a strip of ``rows`` rows at a time: the
+    same points, without holding a large image's gradients at once (a 12 MP
+    frame's are 200 MB). With ``equalize`` (CLAHE, not local to a strip)
+    the whole image's gradients are taken.
+
+    Examples
+    --------
+    >>> from seahough.core.preprocess import compute_gradients
+    >>> rng = np.random.default_rng(0)
+    >>> img = cv2.GaussianBlur(rng.uniform(0, 255, (100, 80)).astype(np.float32), (0, 0), 2)
+    >>> px, py = rng.uniform(0, 79, 300), rng.uniform(0, 99, 300)
+    >>> a = edge_points_near(compute_gradients(img), px, py, 2, 5)
+    >>> b = edge_points_near_image(img, px, py, 2, 5, rows=16)
+    >>> len(a) == len(b), bool(np.array_equal(np.sort(a.x * 1000 + a.y), np.sort(b.x * 1000 + b.y)))
+    (True, True)
+    """
+    h, w = gray.shape[:2]
+    if equalize or h <= rows + 2 * _STRIP_MARGIN:
+        return edge_points_near(compute_gradients(gray, 1.0, equalize), x, y, radius,
+                                min_gradient, mask)
+    x = np.asarray(x, float)
+    y = np.asarray(y, float)
+    reach = int(math.ceil(radius)) + 1
+    parts = []
+    for y0 in range(0, h, rows):
+        y1 = min(h, y0 + rows)
+        near = (y >= y0 - reach) & (y < y1 + reach)
+        if not near.any():
+            continue
+        s0, s1 = max(0, y0 - _STRIP_MARGIN), min(h, y1 + _STRIP_MARGIN)
+        grad = compute_gradients(np.ascontiguousarray(gray[s0:s1]), 1.0, False)
+        sub = None if mask is None else np.asarray(mask)[s0:s1]
+        e = edge_points_near(grad, x[near], y[near] - s0, radius, min_gradient, sub)
+        core = (e.iy >= y0 - s0) & (e.iy < y1 - s0)
+        e = e.take(core)
+        parts.append((e, s0))
+    if not parts:
+        z = np.zeros(0, np.float32)
+        zi = np.zeros(0, np.int32)
+        return EdgePoints(z, z, z, z, zi, zi, (h, w))
+    cat = lambda name: np.concatenate([getattr(e, name) for e, _ in parts])
+    return EdgePoints(cat("x"), np.concatenate([e.y + np.float32(s0) for e, s0 in parts]),
+                      cat("angle"), cat("magnitude"), cat("ix"),
+                      np.concatenate([e.iy + s0 for e, s0 in parts]).astype(parts[0][0].iy.dtype),
+                      (h, w), None, cat("nx"), cat("ny"))
 
 
 def contrast_threshold(magnitude: np.ndarray, n: int, bins: int = 1024) -> float:

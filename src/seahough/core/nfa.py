@@ -228,6 +228,8 @@ class Evidence:
     k: int          # of those, the ones that agree (found an edge point)
     p: float        # mean chance of a match at those points
     log10_nfa: float
+    n_obs: int = 0  # independent observations (one per DEPENDENCE edge points at most)
+    k_obs: int = 0  # of those, the ones that agree
 
     @property
     def nfa(self) -> float:
@@ -266,4 +268,4 @@ def evidence(pose, vx, vy, vang, edges, index, bg: Background, log_tests: float,
     n_obs = int(round(m_eff))
     k_obs = min(int(round(k_eff * m_eff / n_eff)), n_obs)
     tail = log10_binom_tail(k_obs, n_obs, max(p, MIN_CHANCE))
-    return Evidence(n, k, p, max(log_tests + tail, MIN_LOG10_NFA))
+    return Evidence(n, k, p, max(log_tests + tail, MIN_LOG10_NFA), n_obs, k_obs)

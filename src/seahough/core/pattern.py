@@ -22,8 +22,8 @@ from ..errors import ParameterError, PatternError
 from .features import extract_features
 from ..io.images import to_gray
 from . import pattern_io as _pio
-from .keypoints import chain_share, edge_points_near
-from .preprocess import choose_factor, compute_gradients
+from .keypoints import chain_share, edge_points_near_image
+from .preprocess import choose_factor
 from . import shapes as _shapes
 
 POLARITIES = ("bright", "dark", "either")
@@ -142,9 +142,15 @@ class Pattern:
         and, for a colour one, its BGR levels (float32 HxWx3)."""
         if kind not in KINDS:
             raise ParameterError(f"kind={kind!r}: must be one of {', '.join(KINDS)}")
-        self._gray = gray
         self._colour = colour
-        self.image = np.clip(gray, 0, 255).astype(np.uint8)
+        # (by strips of rows: a 12 MP frame's float temporary would be 46 MB)
+        self.image = np.empty(gray.shape, np.uint8)
+        for r in range(0, gray.shape[0], 256):
+            self.image[r:r + 256] = np.clip(gray[r:r + 256], 0, 255)
+        # a frame of whole grey levels (every 8-bit photo) keeps them once, as
+        # 8 bits: a 12 MP frame's float copy is 46 MB, held by every keyframe
+        whole = kind == "frame" and np.array_equal(self.image, gray)
+        self._gray_f = None if whole else gray
         h, w = gray.shape
         if mask is not None:
             mask = to_gray(mask, name="pattern mask") > 0
@@ -342,7 +348,7 @@ class Pattern:
 
     # ------------------------------------------------------------ description
     def _outline_from_mask(self):
-        h, w = self._gray.shape
+        h, w = self.image.shape
         if self.mask is None:
             return [np.array([(0, 0), (w - 1, 0), (w - 1, h - 1), (0, h - 1)], float)]
         cs, _ = cv2.findContours(self.mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
@@ -387,7 +393,15 @@ class Pattern:
                 config.n_verify_points, config.min_gradient, config.segment_steps,
                 config.segment_angle_tol, config.max_segments, config.equalize,
                 config.local_contrast, config.local_window,
-                config.pattern_blur if self.is_photo else 0.0, self._edges_from(config).ndim)
+                config.pattern_blur if self.is_photo else 0.0,
+                3 if config.colour and getattr(self, "_colour", None) is not None else 2)
+
+    @property
+    def _gray(self) -> np.ndarray:
+        """The float32 grey levels (made from the 8-bit image when that holds
+        them exactly)."""
+        g = self.__dict__.get("_gray_f")
+        return self.image.astype(np.float32) if g is None else g
 
     def _edges_from(self, config: Config) -> np.ndarray:
         """The image whose edges are the pattern's: its colours with
@@ -465,8 +479,8 @@ class Pattern:
         r = 0.5 / factor + 0.5
         gray = self._edges_from(config)
         gray = 255.0 - gray if self.polarity == "dark" else gray
-        grad = compute_gradients(np.ascontiguousarray(gray, np.float32), 1.0, config.equalize)
-        edges = edge_points_near(grad, x, y, r, config.min_gradient, self._edge_mask)
+        edges = edge_points_near_image(np.asarray(gray, np.float32), x, y, r, config.min_gradient,
+                                       self._edge_mask, config.equalize)
         f32 = lambda a: np.ascontiguousarray(a, np.float32)
         ids = K.snap_points(x, y, f.vangle.astype(np.float64), edges.x, edges.y, edges.angle,
                             edges.magnitude, edges.index_map(), float(r),

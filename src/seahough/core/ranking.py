@@ -16,9 +16,8 @@ import numpy as np
 from ..geometry import apply_matrix, pose_to_matrix
 from .candidates import Candidate, SearchContext
 from .features import Features
-from .keypoints import edge_points_near
+from .keypoints import edge_points_near_image
 from .nfa import CELL, background, evidence, log10_tests
-from .preprocess import compute_gradients
 from .refine import Fit, Pose, refine
 
 #: Flag on line detections: the position along the line is not measured.
@@ -190,10 +189,11 @@ def _full_edges(ctx: SearchContext, gray, todo):
         x0, y0, x1, y1 = box
         if x1 - x0 < 8 or y1 - y0 < 8:
             continue
-        grad = compute_gradients(np.ascontiguousarray(gray[y0:y1, x0:x1]), 1.0, cfg.equalize)
-        e = edge_points_near(grad, np.concatenate([pts[i][0] for i in members]) - x0,
-                             np.concatenate([pts[i][1] for i in members]) - y0, band_r,
-                             cfg.min_gradient)
+        # (a strip of rows at a time: a large frame's gradients are 200 MB)
+        e = edge_points_near_image(gray[y0:y1, x0:x1],
+                                   np.concatenate([pts[i][0] for i in members]) - x0,
+                                   np.concatenate([pts[i][1] for i in members]) - y0, band_r,
+                                   cfg.min_gradient, None, cfg.equalize)
         for i in members:
             out[i] = (box, e, e.index_map())
     return out

@@ -13,7 +13,8 @@ from ..core.features import Features, extract_features
 from ..core.pattern import Pattern
 from ..core.preprocess import choose_factor
 from ..errors import ImageSizeError, ParameterError, PatternError
-from ..geometry import frame_centre, overlap, shift_origin, wrap_angle
+from ..geometry import frame_centre, matrix_to_pose, overlap, shift_origin, wrap_angle
+from .parallax import check_locally
 from .._validate import check_max_nfa, number
 from ..io.images import to_gray
 
@@ -25,6 +26,13 @@ from ..io.images import to_gray
 #: answer was wrong at a confidence over 0.3 (the few wrong ones, at 0.15-0.26,
 #: are as rare as in full-size frames). 64 keeps a step of margin.
 MIN_MOTION_SIDE = 64
+#: A pair whose similarity is not confident enough is measured tile by tile
+#: (:func:`measure_pair`) only when the vote's own runner-up scores at most
+#: this share less than its answer (``1 - runner-up / answer``). Set on the
+#: tuning part of bench/bench_relief.py, where the true motions of pairs the
+#: similarity declined scored 0.53-0.89; the look-alikes of the tiled pool
+#: (the only repeated texture of the dev data) 0.02-0.42.
+RESCUE_DISTINCT = 0.5
 
 
 @dataclass
@@ -53,6 +61,17 @@ class Motion:
         how many motions this well supported a search of this pair would
         find by chance; the smaller, the stronger the evidence (NaN: not
         known).
+    parallax : float
+        How far parts of the frame stray from the similarity (median, in
+        pixels): the seabed's relief seen from two places, or a camera that
+        looks obliquely (NaN: not measured).
+    homography : ndarray (3, 3) or None
+        Previous-frame pixel -> current-frame pixel as a homography fitted
+        to the parts of the frame (a plane seen from two places; None: not
+        measured).
+
+    ``confidence``, ``score`` and ``nfa`` are measured with each part of
+    the frame allowed a small shift of its own (:mod:`seahough.motion.parallax`).
     """
 
     matrix: np.ndarray
@@ -64,6 +83,8 @@ class Motion:
     score: float
     overlap: float
     nfa: float = float("nan")
+    parallax: float = float("nan")
+    homography: np.ndarray | None = None
 
     def to_dict(self) -> dict:
         """Plain-Python form for JSON (``nfa`` None when not known).
@@ -75,7 +96,10 @@ class Motion:
         return {"matrix": np.asarray(self.matrix).tolist(), "dx": self.dx, "dy": self.dy,
                 "angle": self.angle, "scale": self.scale, "confidence": self.confidence,
                 "score": self.score, "overlap": self.overlap,
-                "nfa": float(self.nfa) if math.isfinite(self.nfa) else None}
+                "nfa": float(self.nfa) if math.isfinite(self.nfa) else None,
+                "parallax": float(self.parallax) if math.isfinite(self.parallax) else None,
+                "homography": (None if self.homography is None
+                               else np.asarray(self.homography).tolist())}
 
 
 def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30.0, 30.0), *,
@@ -147,21 +171,30 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
     b1, b2 = content_box(prev), content_box(cur)
     x0, y0 = max(b1[0], b2[0]), max(b1[1], b2[1])
     x1, y1 = min(b1[2], b2[2]), min(b1[3], b2[3])
+    h, w = prev.shape
+    prev = np.ascontiguousarray(prev[y0:y1, x0:x1])   # (not a view: no copy of a copy)
     try:
-        pattern = Pattern.from_frame(prev[y0:y1, x0:x1], config=cfg)
+        pattern = Pattern.from_frame(prev, config=cfg)
     except PatternError as e:
         raise PatternError(f"previous frame: {e}") from None
-    m = motion_from_pattern(pattern, cur[y0:y1, x0:x1], scale_range, angle_range,
+    # (the pattern keeps its own copy; a large frame's float copies go at once:
+    # a 12 MP pair held 4 of them, 190 MB, through the search)
+    del prev
+    cur = np.ascontiguousarray(cur[y0:y1, x0:x1])
+    m = motion_from_pattern(pattern, cur, scale_range, angle_range,
                             max_shift=max_shift, min_confidence=min_confidence,
                             min_score=min_score, max_nfa=max_nfa, config=cfg)
     if m is None or (x0, y0) == (0, 0):
         return m
     full = shift_origin(m.matrix, -x0, -y0)
-    h, w = prev.shape
-    c = frame_centre(prev.shape)
+    c = frame_centre((h, w))
     dx, dy = full[:, :2] @ c + full[:, 2] - c
+    hom = m.homography
+    if hom is not None:   # (measured on the content boxes: back to whole frames)
+        t = np.array([[1.0, 0.0, -x0], [0.0, 1.0, -y0], [0.0, 0.0, 1.0]])
+        hom = np.linalg.inv(t) @ hom @ t
     return Motion(full, float(dx), float(dy), m.angle, m.scale, m.confidence, m.score,
-                  overlap(full, w, h), m.nfa)
+                  overlap(full, w, h), m.nfa, m.parallax, hom)
 
 
 def check_motion_size(shape, label: str = "frames") -> None:
@@ -197,21 +230,60 @@ def frame_features(gray: np.ndarray, config: Config, scale_range) -> Features:
     return extract_features(gray, frame_factor(gray.shape, config, scale_range), config)
 
 
-def search_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, region, *,
-                min_score: float, config: Config, features: Features | None = None,
-                max_nfa: float = math.inf):
+@dataclass
+class PairMeasure:
+    """One frame pair's best motion and its evidence (:func:`measure_pair`;
+    pixels of the frames as searched)."""
+
+    matrix: np.ndarray          # 2x3 similarity, previous -> current frame
+    confidence: float
+    score: float
+    nfa: float
+    parallax: float = float("nan")
+    homography: np.ndarray | None = None
+    local: bool = False         # measured tile by tile
+
+    def pose(self, origin) -> tuple[float, float, float, float]:
+        """``(x, y, scale, angle)`` of the previous frame's ``origin``."""
+        return matrix_to_pose(self.matrix, origin)
+
+
+def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, region, *,
+                 min_score: float, min_confidence: float, config: Config,
+                 features: Features | None = None, rescue: bool = True) -> PairMeasure | None:
     """The search that measures a pair: the previous frame (``pattern``) in the
     current one (``gray``, a checked grey image as :func:`~seahough.to_gray`
     gives), its centre within ``region`` (x0, y0, x1, y1; current-frame
-    pixels). Returns the best :class:`~seahough.Detection` (its confidence not
-    yet judged; its number of false alarms at most ``max_nfa``, by default
-    not judged either) or None. :func:`motion_from_pattern` and the dead
-    reckoning both measure pairs with it."""
+    pixels). None: nothing found. :func:`motion_from_pattern` and the dead
+    reckoning both measure pairs with it.
+
+    The search's best detection is the answer when its score and confidence
+    reach ``min_score`` and ``min_confidence``. Otherwise its poses are
+    judged tile by tile (:func:`~seahough.motion.parallax.check_locally`): a
+    seabed in relief does not move as one similarity, and the parallax a
+    similarity leaves out lowers its score and confidence under thresholds
+    set on flat scenes; the answer is then the pose that check chose, with
+    its confidence, score and number of false alarms (judged by the caller).
+    Only when ``rescue``, and only when the vote's own runner-up is at least
+    :data:`RESCUE_DISTINCT` behind: a search in a small window around a
+    prediction has no runner-up worth the name (its look-alikes lie outside).
+    """
     det = Detector(pattern, scale_range, angle_range, config=config, max_results=1,
-                   min_score=min_score, min_confidence=0.0, max_nfa=max_nfa,
+                   min_score=min_score, min_confidence=0.0, max_nfa=math.inf,
                    search_region=region)
     res = det.search(gray, features=features)
-    return res.detections[0] if res.detections else None
+    d = res.detections[0] if res.detections else None
+    if (d is not None and d.confidence >= min_confidence) or not (rescue and res.candidates):
+        return None if d is None else PairMeasure(np.asarray(d.matrix, float), d.confidence,
+                                                  d.score, d.nfa)
+    check = check_locally(pattern, res, d, region, scale_range, angle_range, config)
+    if check is None or check.distinct < RESCUE_DISTINCT:
+        # (a peak the vote hardly prefers to its runner-up is a look-alike of a
+        # repeated texture as often as a view spoilt by parallax: not rescued)
+        return None if d is None else PairMeasure(np.asarray(d.matrix, float), d.confidence,
+                                                  d.score, d.nfa)
+    return PairMeasure(check.matrix, check.confidence, check.score, check.nfa, check.parallax,
+                       check.homography, local=True)
 
 
 def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
@@ -222,7 +294,12 @@ def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
     (:meth:`Pattern.from_frame`, origin at its centre); ``features`` may give
     the current frame's (:func:`frame_features`). Like ``min_confidence``,
     ``max_nfa`` judges the best motion found: a weaker one is not put in
-    its place."""
+    its place.
+
+    The thresholds judge the evidence measured tile by tile
+    (:mod:`seahough.motion.parallax`): a seabed in relief is not seen the
+    same from two places, and a single similarity leaves its parallax out.
+    """
     cfg = config or MOTION_CONFIG
     _check_thresholds(max_shift, min_confidence, min_score)
     max_nfa = check_max_nfa(max_nfa)
@@ -235,13 +312,13 @@ def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
     check_motion_size((h, w))
     ox, oy = pattern.origin
     region = (ox - max_shift * w, oy - max_shift * h, ox + max_shift * w, oy + max_shift * h)
-    d = search_pair(pattern, cur, scale_range, angle_range, region, min_score=min_score,
-                    config=cfg, features=features)
-    if d is None or d.confidence < min_confidence or d.nfa > max_nfa:
+    r = measure_pair(pattern, cur, scale_range, angle_range, region, min_score=min_score,
+                     min_confidence=min_confidence, config=cfg, features=features)
+    if r is None or r.confidence < min_confidence or r.score < min_score or r.nfa > max_nfa:
         return None
-    m = d.matrix
-    return Motion(m, d.x - ox, d.y - oy, wrap_angle(d.angle, low=-180.0), d.scale,
-                  d.confidence, d.score, overlap(m, w, h), float(d.nfa))
+    x, y, scale, angle = r.pose((ox, oy))
+    return Motion(r.matrix, x - ox, y - oy, wrap_angle(angle, low=-180.0), scale, r.confidence,
+                  r.score, overlap(r.matrix, w, h), float(r.nfa), r.parallax, r.homography)
 
 
 def _check_thresholds(max_shift, min_confidence, min_score) -> None:

@@ -26,8 +26,8 @@ import numpy as np
 from ..config import Config, OdometryTuning
 from ..errors import SeahoughError
 from ..geometry import (angle_difference, apply_matrix, frame_centre, matrix_to_pose,
-                        nearest_similarity, overlap, shift_origin, wrap_angle)
-from .pair import frame_factor, frame_features, search_pair
+                        overlap, shift_origin, wrap_angle)
+from .pair import frame_factor, frame_features, measure_pair
 from .state import Frame
 
 __all__ = ["Measure", "Searcher", "REASONS", "WIDEN"]
@@ -83,13 +83,15 @@ class Searcher:
         """Features of a cropped frame."""
         return frame_features(gray, self.cfg, self.s_range)
 
-    def _run(self, pattern, gray, feats, s_range, a_range, region, cfg):
+    def _run(self, pattern, gray, feats, s_range, a_range, region, cfg, rescue=True):
         (s0, s1), (a0, a1) = s_range, a_range
         s_range = (max(s0, 1e-3), max(s1, s0, 1e-3))
         if s_range[1] / s_range[0] > 60:
             s_range = (s_range[0], s_range[0] * 60)
-        return search_pair(pattern, gray, s_range, (a0, a1), region,
-                           min_score=self.tuning.min_score, config=cfg, features=feats)
+        return measure_pair(pattern, gray, s_range, (a0, a1), region,
+                            min_score=self.tuning.min_score,
+                            min_confidence=self.tuning.min_confidence, config=cfg,
+                            features=feats, rescue=rescue)
 
     def ranges_around(self, base, n: int, widen: int = 1):
         """Scale and angle ranges of the user's per-pair ranges, ``n`` frames
@@ -167,12 +169,13 @@ class Searcher:
             region = (bx - mx, by - my, bx + mx, by + my)
         try:
             d = self._run(pattern, gray, feats, sr, ar, region,
-                          self.prior_cfg if predicted is not None else self.cfg)
+                          self.prior_cfg if predicted is not None else self.cfg,
+                          rescue=predicted is None)
         except SeahoughError:
             d = None
-        if d is None:
+        if d is None or d.score < t.min_score:
             return None, "no_match"
-        m = nearest_similarity(d.matrix)
+        m = d.matrix
         ov = overlap(m, w, h)
         if d.confidence < t.min_confidence:
             return None, "low_confidence"
@@ -185,8 +188,9 @@ class Searcher:
             # prior was wrong and the window cut the true peak off)
             x0, y0, x1, y1 = region
             slack = 0.25 * self.prior_radius
-            ang = angle_difference(d.angle, pa)
-            if not (x0 - slack <= d.x <= x1 + slack and y0 - slack <= d.y <= y1 + slack) or \
+            dx, dy, _, da = d.pose(c)
+            ang = angle_difference(da, pa)
+            if not (x0 - slack <= dx <= x1 + slack and y0 - slack <= dy <= y1 + slack) or \
                     abs(ang) > t.prior_angle + 2.0:
                 return None, "no_match"
         return Measure(shift_origin(m, -ox, -oy), float(d.confidence), float(d.score), ov,

@@ -6,7 +6,8 @@ known exactly: a docking marker pasted at a known pose
 (:func:`fragment_scene`), two camera frames related by a known similarity
 motion (:func:`frame_pair`), a rope crossing the frame (:func:`rope_scene`)
 or lying in a curve (:func:`curved_rope_scene`),
-a whole camera path (:func:`sequence`), a marker painted in a colour whose
+a whole camera path (:func:`sequence`), survey frames over a seabed in
+relief that differ by parallax (:func:`relief_sequence`), a marker painted in a colour whose
 red fades with distance in the water (:func:`colour_marker_scene`).
 
 Scenes are built from a background (:mod:`.backgrounds`: a real seabed photo
@@ -37,6 +38,7 @@ from .files import write_simulation
 from .markers import MARKERS, Truth, marker, paste_pattern, random_pose
 from .scenes import fragment_scene, frame_pair, marker_scene, negative_scene, rope_scene
 from .scenes import CurveTruth, curved_rope_scene
+from .relief import ReliefTruth, relief_sequence
 from .sequences import sequence
 from .water import PRESETS, Water, apply_water
 
@@ -59,6 +61,8 @@ __all__ = [
     "curved_rope_scene",
     "CurveTruth",
     "sequence",
+    "relief_sequence",
+    "ReliefTruth",
     "write_simulation",
     "PAINTS",
     "BorderContrast",
