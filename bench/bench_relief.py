@@ -24,7 +24,9 @@ seabed (seen while tuning); test part = dtu_seabed_pair/scene2.png (the
 same reef a few metres on), aqualoc_amphorae_wreck/frame_040.png (a wreck,
 grey) and seabed/dtu_starfish_murky.jpg; seeds are the same in both parts.
 Methods and timing as bench_real_pairs.py (CPU time, single thread,
-seahough ``estimate_motion`` at its defaults).
+seahough ``estimate_motion`` at its defaults). Dead reckoning:
+``run_odometry`` over each sequence at native size, its steps against the
+truth.
 
     python bench/bench_relief.py --write   # docs/relief.md (~6 min)
     python bench/bench_relief.py --quick   # 2 sequences, half size (~20 s)
@@ -34,7 +36,9 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import math
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -45,7 +49,9 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 import bench_real_pairs as R  # noqa: E402
+import seahough  # noqa: E402
 from seahough import sim  # noqa: E402
+from seahough.geometry import compose, invert_matrix  # noqa: E402
 from seahough._data import shared_data_dir  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -98,6 +104,27 @@ def measure(photo: str, part: str, seed: int, sizes) -> list[dict]:
     return out
 
 
+def dead_reckoning(photo: str, part: str, seed: int) -> dict:
+    """run_odometry over the sequence at native size (frames in memory, no
+    mosaic): pairs measured, and each measured step against the truth."""
+    frames, truth = render(photo, seed)
+    shape = frames[0].shape[:2]
+    with tempfile.TemporaryDirectory() as tmp:
+        t = time.process_time()
+        rows = seahough.run_odometry(frames, tmp, mosaic=False, progress=False).rows
+        ms = 1000 * (time.process_time() - t) / len(frames)
+    errs = []
+    for a, b in zip(rows, rows[1:]):
+        if b["status"] != "measured" or a["status"] not in ("origin", "measured"):
+            continue
+        step = compose(np.reshape(b["matrix"], (2, 3)), invert_matrix(np.reshape(a["matrix"],
+                                                                                 (2, 3))))
+        m, _ = truth.similarity(a["index"], b["index"])
+        errs.append(R.corner_error(step, m, shape) / R.diagonal(shape))
+    return dict(part=part, pairs=len(rows) - 1,
+                measured=sum(r["status"] == "measured" for r in rows[1:]), errs=errs, ms=ms)
+
+
 def strong_cells(recs, method):
     """Pairs with strong parallax: answered, within 2 % of the truth."""
     strong = [r for r in recs if r["ref"] is None]
@@ -106,7 +133,7 @@ def strong_cells(recs, method):
     return [str(len(strong)), R.pct(len(ans), len(strong)), R.pct(len(good), len(ans))]
 
 
-def page(recs, seconds: float, quick: bool) -> str:
+def page(recs, runs, seconds: float, quick: bool) -> str:
     lines = ["# Survey pairs over a seabed in relief (rendered, exact truth)", "",
              f"Command: `{command()}`  ",
              f"Date: {datetime.date.today().isoformat()}  ",
@@ -144,6 +171,22 @@ def page(recs, seconds: float, quick: bool) -> str:
             sub = [r for r in recs if r["part"] == part]
             rows.append([method, part] + strong_cells(sub, method))
     lines += R.table(["method", "part", "pairs", "answered", "within 2 % (of answers)"], rows)
+    lines += ["", "## Dead reckoning (run_odometry at its defaults, native size)", "",
+              "Each sequence's 4 frames; a step is measured when its row's status is "
+              "`measured` and the frame before it was measured too; error against the "
+              "true similarity of the pair.", ""]
+    rows = []
+    for part in parts:
+        sub = [r for r in runs if r["part"] == part]
+        if sub:
+            errs = [e for r in sub for e in r["errs"]]
+            rows.append([part, str(len(sub)), R.pct(sum(r["measured"] for r in sub),
+                                                     sum(r["pairs"] for r in sub)),
+                         R.fnum(100 * float(np.median(errs)) if errs else math.nan),
+                         R.pct(sum(e <= 0.01 for e in errs), len(errs)),
+                         R.fnum(float(np.median([r["ms"] for r in sub])), 1)])
+    lines += R.table(["part", "sequences", "pairs measured", "median step error % diag",
+                      "steps within 1 %", "CPU ms a frame (median)"], rows)
     lines += ["", "## Parallax of the pairs", ""]
     rows = []
     for part in parts:
@@ -170,7 +213,7 @@ def main(argv=None) -> int:
         print("bench_relief: ../shared/data not found", file=sys.stderr)
         return 2
     t0 = time.time()
-    recs = []
+    recs, runs = [], []
     jobs = ([(TUNE[1], "tune", 0), (TEST[2], "test", 1)] if args.quick else
             [(p, "tune", s) for p in TUNE for s in range(SEEDS)]
             + [(p, "test", s) for p in TEST for s in range(SEEDS)])
@@ -180,13 +223,13 @@ def main(argv=None) -> int:
     for photo, part, seed in jobs:
         t = time.time()
         recs += measure(photo, part, seed, sizes)
+        runs.append(dead_reckoning(photo, part, seed))
         R.log(f"{photo} seed {seed}: {time.time() - t:.0f} s")
-    text = page(recs, time.time() - t0, args.quick)
+    text = page(recs, runs, time.time() - t0, args.quick)
+    print(text)
     out = args.out or (DOC if args.write else None)
     if out:
         write_page(text, out)
-    else:
-        print(text)
     return 0
 
 

@@ -157,6 +157,26 @@ def test_real_pairs_benchmark_quick(tmp_path):
     assert len(odo) == 5 and all(re.match(r"\d+/\d+", r[3]) for r in odo)
 
 
+def test_relief_benchmark_quick(tmp_path):
+    """bench/bench_relief.py --quick: every table, counts that add up."""
+    if shared_data_dir() is None:
+        pytest.skip("real data (../shared/data) is not present beside this checkout")
+    text = _quick_page(ROOT / "bench" / "bench_relief.py", tmp_path / "relief.md")
+    assert "Machine:" in text and "Command:" in text and "Split by photo: tune part" in text
+    scored = _rows(_section(text, "## Scored pairs"))
+    strong = _rows(_section(text, "## Pairs with strong parallax"))
+    n_scored = {r[1]: int(r[2]) for r in scored[1:] if r[0] == "seahough"}
+    n_strong = {r[1]: int(r[2]) for r in strong[1:] if r[0] == "seahough"}
+    # one sequence a part, 3 pairs at half size: scored or not
+    assert n_scored["tune"] + n_strong["tune"] == 3 and n_scored["test"] + n_strong["test"] == 3
+    for r in scored[1:]:
+        answered = re.match(r"(\d+)/(\d+)", r[3])
+        assert int(answered.group(2)) == int(r[2]) and int(answered.group(1)) <= int(r[2]), r
+    odo = _rows(_section(text, "## Dead reckoning"))[1:]
+    assert [r[0] for r in odo] == ["test", "tune"]
+    assert all(re.match(r"\d+/3 ", r[2]) for r in odo), odo
+
+
 def test_real_pairs_reference_rule():
     """The reference of two fits is their mean where their corners agree within
     0.5 % of the diagonal, none otherwise; the KLT fit recovers a known motion."""

@@ -136,3 +136,41 @@ def test_local_evidence_pays_for_each_tiles_shift():
                            tol=math.radians(20))
     assert off.score > 0.8 and off.parallax < 0.5
     assert np.allclose(off.similarity[:, 2], [-5, 0], atol=0.3)
+
+
+# ------------------------------------------------------------ large frames' memory
+def test_a_checked_float_frame_is_not_copied_again():
+    g = np.full((80, 100), 120.0, np.float32)
+    out = seahough.to_gray(g)
+    assert np.shares_memory(out, g) and not out.flags.writeable
+    assert g.flags.writeable                      # (the caller's array is untouched)
+    unit = np.full((80, 100), 0.5, np.float32)    # [0, 1] levels are scaled: a copy
+    assert not np.shares_memory(seahough.to_gray(unit), unit)
+
+
+def test_an_8_bit_frame_pattern_keeps_its_levels_once():
+    frame = sim.seabed((240, 320), seed=3)[:, :, 1]
+    p = seahough.Pattern.from_frame(frame)
+    assert p.__dict__["_gray_f"] is None and p.image.dtype == np.uint8
+    assert np.array_equal(p._gray, frame.astype(np.float32))
+    fractional = seahough.Pattern.from_frame(frame.astype(np.float32) + 0.25)
+    assert fractional.__dict__["_gray_f"] is not None     # (levels 8 bits cannot hold)
+
+
+def test_a_large_pair_holds_few_copies_of_its_frames():
+    # the numpy memory estimate_motion allocates at its peak, in frames of
+    # float32 (deterministic: tracemalloc counts numpy's allocations). It held
+    # 12 frames' worth for a 12 MP pair before the full-resolution edges were
+    # taken by strips and the frames' float copies dropped; about 3 now
+    import tracemalloc
+    big = sim.seabed((1700, 2300), seed=4)
+    a, b = big[:1500, :2000], big[150:1650, 250:2250]
+    seahough.estimate_motion(a[::8, ::8], b[::8, ::8])
+    tracemalloc.start()
+    try:
+        m = seahough.estimate_motion(a, b)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert m is not None and abs(m.dx + 250) < 1.5 and abs(m.dy + 150) < 1.5
+    assert peak < 5 * 1500 * 2000 * 4, peak / 2 ** 20
