@@ -177,6 +177,20 @@ def test_relief_benchmark_quick(tmp_path):
     assert all(re.match(r"\d+/3 ", r[2]) for r in odo), odo
 
 
+def test_small_patch_benchmark_quick(tmp_path):
+    """bench/bench_small_patch.py --quick: the tables, counts that add up."""
+    if shared_data_dir() is None:
+        pytest.skip("real data (../shared/data) is not present beside this checkout")
+    text = _quick_page(ROOT / "bench" / "bench_small_patch.py", tmp_path / "small_patch.md")
+    assert "Machine:" in text and "Split by photo: tune part" in text
+    totals = _rows(_section(text, "## Totals"))[1:]
+    assert [r[0] for r in totals] == ["test"] * 3 + ["tune"] * 3
+    for r in totals:
+        found = re.match(r"(\d+)/(\d+)", r[2])
+        # one photo a part, a 96 px patch in each of its two frames
+        assert int(found.group(2)) == 2 and int(found.group(1)) + int(r[3]) <= 2, r
+
+
 def test_real_pairs_reference_rule():
     """The reference of two fits is their mean where their corners agree within
     0.5 % of the diagonal, none otherwise; the KLT fit recovers a known motion."""

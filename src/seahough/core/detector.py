@@ -30,6 +30,11 @@ __all__ = ["Detector", "SearchResult", "SEARCH_NOTES", "Detection", "confidence"
            "line_parameters", "FLAG_ALONG_LINE", "FLAG_AMBIGUOUS", "FLAG_OUTSIDE_RANGE",
            "FLAG_PARTIAL"]
 
+#: A texture pattern small in a large image: the key points taken put this
+#: many times its own points on its area (``Detector._n_keypoints``) ...
+TEXTURE_DENSITY = 0.5
+#: ... up to this many (the voting cost grows with them).
+MAX_KEYPOINTS = 20_000
 #: Why a search ended early with no detections ("" when it ran to the end).
 SEARCH_NOTES = ("", "no edges", "pattern larger than the image",
                 "search_region is outside the image")
@@ -185,7 +190,7 @@ class Detector:
                 gray.shape, cfg, p.extent, s0)
         if features is None:
             features = extract_features(gray, factor, self._features_config(),
-                                        n_keypoints=self._n_keypoints())
+                                        n_keypoints=self._n_keypoints(gray.shape, factor))
         t1 = time.perf_counter()
         timings["features"] = t1 - t0
         if len(features.segments) < 4:
@@ -227,12 +232,35 @@ class Detector:
             return cfg.replace(chain_length=0.0)
         return cfg
 
-    def _n_keypoints(self) -> int | None:
-        """How many key points a search takes (None: the Config's default)."""
-        n = self.config.n_keypoints_2d
+    def _n_keypoints(self, shape=None, factor: float | None = None) -> int | None:
+        """How many key points a search of an image of ``shape`` at working
+        scale ``factor`` takes (None: the Config's default).
+
+        The key points are the image's most contrasted edge points, so a
+        texture pattern (a seabed patch) that covers a small share of a large
+        image gets few of them: a 96 px patch in a 1280x720 frame about 12
+        of the 1,200, and it was found 1 time in 6. Such a search takes
+        enough for :data:`TEXTURE_DENSITY` times the pattern's own points to
+        fall on its area, at most :data:`MAX_KEYPOINTS` (shapes keep the
+        default: their borders are among the most contrasted edges).
+        """
+        cfg = self.config
+        n = cfg.n_keypoints_2d
         a0, a1 = self._angles()
         known = self.scale_range[0] == self.scale_range[1] and a0 == a1
-        return n if known and n is not None else None
+        if known and n is not None:
+            return n
+        p = self.pattern
+        if shape is None or factor is None or p.is_frame or p.is_line or not p.is_photo \
+                or p.has_long_borders(cfg):
+            return None
+        ph, pw = p.image.shape[:2]
+        h, w = shape[:2]
+        share = (pw * ph * self.scale_range[0] ** 2) / float(w * h)
+        want = TEXTURE_DENSITY * cfg.n_pattern_points / max(share, 1e-9)
+        if want <= cfg.n_keypoints:
+            return None
+        return int(min(want, MAX_KEYPOINTS))
 
     def _angles(self) -> tuple:
         """The rotations searched: a disc or a ring looks the same at every
@@ -260,8 +288,8 @@ class Detector:
                 shared[None] = features
                 continue
             fcfg = d._features_config()
-            key = (choose_factor(gray.shape, cfg, d.pattern.extent, d.scale_range[0]),
-                   d._n_keypoints(), fcfg.chain_length)
+            f = choose_factor(gray.shape, cfg, d.pattern.extent, d.scale_range[0])
+            key = (f, d._n_keypoints(gray.shape, f), fcfg.chain_length)
             keys[name] = key
             if key not in shared:
                 shared[key] = extract_features(gray, key[0], fcfg, n_keypoints=key[1])

@@ -1,0 +1,195 @@
+"""A small seabed patch found again in a large frame.
+
+A square patch (64, 96 or 128 px) is cut from a photo; the photo is turned
+by a random angle and rescaled by 0.9-1.1 about the patch's centre (the
+camera came back turned and at another altitude), seen through clear or
+moderate water (``seahough.sim.apply_water``), and the patch is searched for
+in it: ``seahough.Detector(Pattern(patch), scale_range=(0.85, 1.15))``, full
+turn, its defaults. (Positions whose patch has too few edges to be a pattern
+are drawn again.) Found = the best detection's origin (the patch centre)
+within 3 px of the truth; wrong = a detection farther off. Compared: the
+same search without the key points added for small texture patterns
+(``core.detector.TEXTURE_DENSITY = 0``: the search before issue 13, point 4),
+and SIFT + ratio test + RANSAC (bench/peers.py ``FeatureLocator``).
+
+Split by photo: tune part = the procedural seabed and
+dtu_seabed_pair/scene1.png (TEXTURE_DENSITY was set on the procedural seabed); test part =
+dtu_seabed_pair/scene2.png and aqualoc_amphorae_wreck/frame_040.png. Frames
+are the photo at 1280 px wide and at its own size (1920x1080; the wreck
+968x608 and 1280x804).
+
+    python bench/bench_small_patch.py --write   # docs/small_patch.md (~3 min)
+    python bench/bench_small_patch.py --quick   # a smoke run (~20 s)
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import math
+import sys
+import time
+import zlib
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import command, machine, steady_allocator, write_page  # noqa: E402
+
+import cv2  # noqa: E402
+import numpy as np  # noqa: E402
+
+import peers  # noqa: E402
+import seahough  # noqa: E402
+import seahough.core.detector as D  # noqa: E402
+from seahough import sim  # noqa: E402
+from seahough._data import shared_data_dir  # noqa: E402
+from seahough.errors import PatternError  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+DOC = ROOT / "docs" / "small_patch.md"
+TUNE = ("procedural", "sequences/dtu_seabed_pair/scene1.png")
+TEST = ("sequences/dtu_seabed_pair/scene2.png", "sequences/aqualoc_amphorae_wreck/frame_040.png")
+SIDES = (64, 96, 128)
+CASES = 8
+GOOD_PX = 3.0
+METHODS = ("seahough", "seahough, no added key points", "SIFT+RANSAC")
+
+
+def photos(name: str):
+    """The frames of a photo: 1280 px wide and its own size."""
+    if name == "procedural":
+        return [sim.seabed((720, 1280), seed=11), sim.seabed((1080, 1920), seed=12)]
+    img = cv2.imread(str(shared_data_dir() / name), cv2.IMREAD_COLOR)
+    h, w = img.shape[:2]
+    small = cv2.resize(img, (1280, round(h * 1280 / w)),
+                       interpolation=cv2.INTER_AREA if w > 1280 else cv2.INTER_CUBIC)
+    return [small, img]
+
+
+def _seahough(patch, scene, density):
+    old = D.TEXTURE_DENSITY
+    D.TEXTURE_DENSITY = density
+    try:
+        d = seahough.Detector(seahough.Pattern(patch), scale_range=(0.85, 1.15)).detect(scene)
+    finally:
+        D.TEXTURE_DENSITY = old
+    return None if not d else (d[0].x, d[0].y)
+
+
+def _sift(patch, scene):
+    r = peers.FeatureLocator("sift", patch).locate(scene)
+    if r.matrix is None:
+        return None
+    side = patch.shape[0]
+    c = np.array([(side - 1) / 2.0, (side - 1) / 2.0])
+    return tuple(r.matrix[:, :2] @ c + r.matrix[:, 2])
+
+
+def cases(name: str, part: str, n: int, sides):
+    rng = np.random.default_rng(zlib.crc32(name.encode()))
+    for frame in photos(name):
+        h, w = frame.shape[:2]
+        for side in sides:
+            for k in range(n):
+                for _ in range(50):   # (a patch with no edges to find is not a case)
+                    x = int(rng.uniform(side, w - 2 * side))
+                    y = int(rng.uniform(side, h - 2 * side))
+                    try:
+                        seahough.Pattern(frame[y:y + side, x:x + side])
+                        break
+                    except PatternError:
+                        continue
+                c = (x + (side - 1) / 2.0, y + (side - 1) / 2.0)
+                m = cv2.getRotationMatrix2D(c, float(rng.uniform(-180, 180)),
+                                            float(rng.uniform(0.9, 1.1)))
+                scene = cv2.warpAffine(frame, m, (w, h), flags=cv2.INTER_LINEAR,
+                                       borderMode=cv2.BORDER_REFLECT)
+                water = ("clear", "moderate")[k % 2]
+                scene = sim.apply_water(scene, water, seed=int(rng.integers(1 << 30)))
+                yield dict(photo=name, part=part, frame=f"{w}x{h}", side=side, water=water,
+                           truth=c), frame[y:y + side, x:x + side], scene
+
+
+def measure(case, patch, scene) -> dict:
+    out = {}
+    fns = {"seahough": lambda: _seahough(patch, scene, D.TEXTURE_DENSITY),
+           "seahough, no added key points": lambda: _seahough(patch, scene, 0.0),
+           "SIFT+RANSAC": lambda: _sift(patch, scene)}
+    for name, fn in fns.items():
+        t = time.process_time()
+        r = fn()
+        ms = 1000 * (time.process_time() - t)
+        err = math.inf if r is None else math.hypot(r[0] - case["truth"][0],
+                                                     r[1] - case["truth"][1])
+        out[name] = dict(answered=r is not None, err=err, ms=ms)
+    return dict(case, res=out)
+
+
+def _cells(recs, method):
+    n = len(recs)
+    found = sum(r["res"][method]["err"] <= GOOD_PX for r in recs)
+    wrong = sum(r["res"][method]["answered"] and r["res"][method]["err"] > GOOD_PX for r in recs)
+    ms = float(np.median([r["res"][method]["ms"] for r in recs])) if recs else math.nan
+    return [f"{found}/{n} ({100 * found / max(n, 1):.0f} %)", str(wrong), f"{ms:.0f}"]
+
+
+def page(recs, seconds: float, quick: bool) -> str:
+    lines = ["# A small seabed patch in a large frame", "",
+             f"Command: `{command()}`  ", f"Date: {datetime.date.today().isoformat()}  ",
+             f"Machine: {machine()}  ",
+             f"Single-threaded; {steady_allocator()} Whole run: {seconds:.0f} s.", "",
+             "Split by photo: tune part = " + ", ".join(TUNE) + "; test part = "
+             + ", ".join(TEST) + ". How the cases are made: bench/bench_small_patch.py's "
+             f"docstring. Found = within {GOOD_PX:g} px of the true patch centre; wrong = an "
+             "answer farther off.", ""]
+    if quick:
+        lines += ["**Quick run** (a smoke test, not a result).", ""]
+    head = ["part", "frame width", "patch px", "method", "found", "wrong", "median CPU ms"]
+    rows = []
+    for part in ("test", "tune"):
+        for wide in ("1280", "native"):
+            for side in SIDES:
+                sub = [r for r in recs if r["part"] == part and r["side"] == side
+                       and (r["frame"].startswith("1280x") == (wide == "1280"))]
+                if not sub:
+                    continue
+                for method in METHODS:
+                    rows.append([part, wide, str(side), method] + _cells(sub, method))
+    lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    lines += ["| " + " | ".join(r) + " |" for r in rows]
+    lines += ["", "## Totals", "", "| part | method | found | wrong | median CPU ms |",
+              "|---|---|---|---|---|"]
+    for part in ("test", "tune"):
+        sub = [r for r in recs if r["part"] == part]
+        for method in METHODS:
+            if sub:
+                lines.append("| " + " | ".join([part, method] + _cells(sub, method)) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--write", action="store_true", help="write docs/small_patch.md")
+    ap.add_argument("--quick", action="store_true", help="a smoke run")
+    ap.add_argument("--out", type=Path, help="write the page here")
+    args = ap.parse_args(argv)
+    if shared_data_dir() is None:
+        print("bench_small_patch: ../shared/data not found", file=sys.stderr)
+        return 2
+    t0 = time.time()
+    n, sides = (1, (96,)) if args.quick else (CASES, SIDES)
+    jobs = [(p, "tune") for p in TUNE] + [(p, "test") for p in TEST]
+    if args.quick:
+        jobs = [jobs[0], jobs[2]]
+    recs = [measure(c, patch, scene)
+            for p, part in jobs for c, patch, scene in cases(p, part, n, sides)]
+    text = page(recs, time.time() - t0, args.quick)
+    print(text)
+    out = args.out or (DOC if args.write else None)
+    if out:
+        write_page(text, out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
