@@ -174,3 +174,21 @@ def test_a_large_pair_holds_few_copies_of_its_frames():
         tracemalloc.stop()
     assert m is not None and abs(m.dx + 250) < 1.5 and abs(m.dy + 150) < 1.5
     assert peak < 5 * 1500 * 2000 * 4, peak / 2 ** 20
+
+
+def test_the_homography_is_measured_when_asked():
+    # a flat seabed seen from two places: the similarity answers as without
+    # the option, and the homography asked for fits the true motion too
+    frames, truth = sim.relief_sequence(n_frames=2, frame_size=(480, 640), relief=0.0,
+                                        seed=3, source="procedural", water="clear")
+    plain = seahough.estimate_motion(frames[0], frames[1])
+    asked = seahough.estimate_motion(frames[0], frames[1], homography=True)
+    assert plain is not None and plain.homography is None and math.isnan(plain.parallax)
+    assert asked is not None and asked.homography.shape == (3, 3)
+    np.testing.assert_allclose(asked.matrix, plain.matrix)      # the same answer
+    assert asked.confidence == plain.confidence and asked.parallax < 1.0
+    p, q = truth.flow(0, 1, step=32)
+    hp = asked.homography @ np.vstack([p.T, np.ones(len(p))])
+    err = np.hypot(*(hp[:2] / hp[2] - q.T)).max()
+    assert err < 2.0, err                      # a flat seabed: one homography
+    assert asked.to_dict()["homography"] is not None
