@@ -101,13 +101,44 @@ def test_parallax_that_spoils_the_similarity_is_measured_tile_by_tile(monkeypatc
 def test_unrelated_frames_are_not_made_a_match_by_the_tiles_freedom():
     # two different seabeds: the tiles may shift, and the number of false
     # alarms pays for it
+    from seahough.core.keypoints import find_edge_points
+    from seahough.core.nfa import background
+    from seahough.core.preprocess import compute_gradients
+
     a = sim.relief_sequence(n_frames=2, frame_size=(480, 640), seed=1, source="procedural",
                             water="clear")[0][0]
     b = sim.relief_sequence(n_frames=2, frame_size=(480, 640), seed=5, source="procedural",
                             water="clear")[0][1]
     assert seahough.estimate_motion(a, b) is None
-    m = seahough.estimate_motion(a, b, min_confidence=0.0, min_score=0.0, max_nfa=math.inf)
-    assert m is None or m.nfa > 1.0 or m.confidence < 0.15
+    edges = [find_edge_points(compute_gradients(seahough.to_gray(f), 0.5), 20) for f in (a, b)]
+    idx = edges[1].index_map()
+    bg = background(edges[1], 1.25, math.radians(20), None, idx)
+    for shift in ([[1, 0, 0], [0, 1, 0]], [[1, 0, 12], [0, 1, -7]]):
+        ev = P.local_evidence(P.strongest(edges[0]), edges[1], idx, shift, bg, 7.0,
+                              tol=math.radians(20), match_radius=1.25)
+        assert ev.tiles >= 12 and ev.nfa > 1.0 and ev.score < 0.3, (ev.score, ev.nfa)
+
+
+def test_a_survey_measures_its_chunk_links_tile_by_tile_too():
+    # survey odometry's links between chunks go through estimate_motion with
+    # the run's own threshold, so a pair in relief is rescued there as in
+    # run_odometry (it asked for min_confidence=0 and judged itself: never)
+    from seahough.config import OdometryTuning
+    from seahough.motion.pair import MOTION_CONFIG
+    from seahough.survey._odometry_chain import measure_across
+
+    frames, truth = sim.relief_sequence(source=data_path("sequences", "dtu_seabed_pair",
+                                                         "scene1.png"),
+                                        n_frames=2, relief=0.18, seed=6, water="moderate")
+
+    class Reader:
+        def raw(self, i):
+            return frames[i]
+
+    # (min_score 0: the similarity's detection is kept, at its low confidence)
+    mo, why = measure_across(Reader(), 0, 1, (0.8, 1.25), (-30.0, 30.0), MOTION_CONFIG,
+                             OdometryTuning(min_score=0.0))
+    assert why == "" and mo is not None and mo.parallax > 2.0, why
 
 
 def test_local_evidence_pays_for_each_tiles_shift():

@@ -68,11 +68,14 @@ _NO_MASK = np.zeros((0, 0), np.uint8)
 
 
 def find_edge_points(grad: Gradients, min_gradient: float,
-                     mask: np.ndarray | None = None) -> EdgePoints:
+                     mask: np.ndarray | None = None, row0: int = 0) -> EdgePoints:
     """Thin edges to one pixel (non-maximum suppression) with sub-pixel positions.
 
     ``mask`` (the gradients' shape, non-zero where wanted) limits the points
     to some pixels; the suppression still compares with every neighbour.
+    ``row0``: the gradients are rows of a larger image from this row on: the
+    points' ``y`` are that image's (``iy`` and the index map stay these
+    rows').
 
     Examples
     --------
@@ -85,13 +88,13 @@ def find_edge_points(grad: Gradients, min_gradient: float,
     phase = cv2.phase(grad.gx, grad.gy)  # [0, 2 pi), vectorised (about 0.3 deg accurate)
     mask = _NO_MASK if mask is None else np.ascontiguousarray(mask, np.uint8)
     x, y, a, m, ix, iy, index, nx, ny = K.edge_points(grad.magnitude, grad.gx, grad.gy, phase,
-                                                      np.float32(min_gradient), mask)
+                                                      np.float32(min_gradient), mask, int(row0))
     a[a >= np.float32(2 * np.pi)] = 0.0
     return EdgePoints(x, y, a, m, ix, iy, grad.magnitude.shape, index, nx, ny)
 
 
 def edge_points_near(grad: Gradients, x, y, radius: float, min_gradient: float,
-                     mask: np.ndarray | None = None) -> EdgePoints:
+                     mask: np.ndarray | None = None, row0: int = 0) -> EdgePoints:
     """The edge points (:func:`find_edge_points`) in a band around the points
     ``(x, y)`` (pixels of ``grad``): a square of side ``2 ceil(radius) + 1``
     around each, and only where ``mask`` (bool, optional) is set.
@@ -114,7 +117,7 @@ def edge_points_near(grad: Gradients, x, y, radius: float, min_gradient: float,
     band = cv2.dilate(band, np.ones((k, k), np.uint8))
     if mask is not None:
         band &= np.asarray(mask, bool).astype(np.uint8)
-    return find_edge_points(grad, min_gradient, band)
+    return find_edge_points(grad, min_gradient, band, row0)
 
 
 #: Rows of a strip of :func:`edge_points_near_image` (and the rows around
@@ -138,10 +141,16 @@ def edge_points_near_image(gray: np.ndarray, x, y, radius: float, min_gradient: 
     >>> rng = np.random.default_rng(0)
     >>> img = cv2.GaussianBlur(rng.uniform(0, 255, (100, 80)).astype(np.float32), (0, 0), 2)
     >>> px, py = rng.uniform(0, 79, 300), rng.uniform(0, 99, 300)
-    >>> a = edge_points_near(compute_gradients(img), px, py, 2, 5)
-    >>> b = edge_points_near_image(img, px, py, 2, 5, rows=16)
-    >>> len(a) == len(b), bool(np.array_equal(np.sort(a.x * 1000 + a.y), np.sort(b.x * 1000 + b.y)))
-    (True, True)
+    >>> def pixels(e):    # (the points by pixel, and their positions)
+    ...     o = np.lexsort((e.ix, e.iy))
+    ...     return e.ix[o], e.iy[o], e.x[o], e.y[o]
+    >>> for r in (2, 6.75):   # (a band wider than the strips' margin of 3 rows too)
+    ...     a = pixels(edge_points_near(compute_gradients(img), px[::10], py[::10], r, 5))
+    ...     b = pixels(edge_points_near_image(img, px[::10], py[::10], r, 5, rows=16))
+    ...     print(a[0].size > 50, all(np.array_equal(u, v) for u, v in zip(a[:2], b[:2])),
+    ...           all(np.array_equal(u, v) for u, v in zip(a[2:], b[2:])))
+    True True True
+    True True True
     """
     h, w = gray.shape[:2]
     if equalize or h <= rows + 2 * _STRIP_MARGIN:
@@ -150,16 +159,19 @@ def edge_points_near_image(gray: np.ndarray, x, y, radius: float, min_gradient: 
     x = np.asarray(x, float)
     y = np.asarray(y, float)
     reach = int(math.ceil(radius)) + 1
+    # the rows a strip's points may reach (their bands), and the rows around
+    # those that the gradients and the thinning look at
+    margin = max(_STRIP_MARGIN, reach + 2)
     parts = []
     for y0 in range(0, h, rows):
         y1 = min(h, y0 + rows)
         near = (y >= y0 - reach) & (y < y1 + reach)
         if not near.any():
             continue
-        s0, s1 = max(0, y0 - _STRIP_MARGIN), min(h, y1 + _STRIP_MARGIN)
+        s0, s1 = max(0, y0 - margin), min(h, y1 + margin)
         grad = compute_gradients(np.ascontiguousarray(gray[s0:s1]), 1.0, False)
         sub = None if mask is None else np.asarray(mask)[s0:s1]
-        e = edge_points_near(grad, x[near], y[near] - s0, radius, min_gradient, sub)
+        e = edge_points_near(grad, x[near], y[near] - s0, radius, min_gradient, sub, row0=s0)
         core = (e.iy >= y0 - s0) & (e.iy < y1 - s0)
         e = e.take(core)
         parts.append((e, s0))
@@ -168,7 +180,8 @@ def edge_points_near_image(gray: np.ndarray, x, y, radius: float, min_gradient: 
         zi = np.zeros(0, np.int32)
         return EdgePoints(z, z, z, z, zi, zi, (h, w))
     cat = lambda name: np.concatenate([getattr(e, name) for e, _ in parts])
-    return EdgePoints(cat("x"), np.concatenate([e.y + np.float32(s0) for e, s0 in parts]),
+    # (y is already the image's: row0)
+    return EdgePoints(cat("x"), cat("y"),
                       cat("angle"), cat("magnitude"), cat("ix"),
                       np.concatenate([e.iy + s0 for e, s0 in parts]).astype(parts[0][0].iy.dtype),
                       (h, w), None, cat("nx"), cat("ny"))

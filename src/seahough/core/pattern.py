@@ -150,6 +150,8 @@ class Pattern:
         # a frame of whole grey levels (every 8-bit photo) keeps them once, as
         # 8 bits: a 12 MP frame's float copy is 46 MB, held by every keyframe
         whole = kind == "frame" and np.array_equal(self.image, gray)
+        if not whole and gray.base is not None:
+            gray = gray.copy()   # (a view of the caller's array: to_gray does not copy)
         self._gray_f = None if whole else gray
         h, w = gray.shape
         if mask is not None:
@@ -299,51 +301,8 @@ class Pattern:
         w, h = pts.max(axis=0)
         return cls._shape([pts], w, h, margin, polarity, "polygon")
 
-    @classmethod
-    def circle(cls, radius, inner_radius=None, *, polarity="bright", margin=6.0) -> "Pattern":
-        """A filled disc, or a ring when ``inner_radius`` is given."""
-        _check_positive(radius=radius)
-        r = float(radius)
-        holes = ()
-        kind = "circle"
-        if inner_radius is not None:
-            _check_positive(inner_radius=inner_radius)
-            if not float(inner_radius) < r:
-                raise ParameterError(f"inner_radius={inner_radius!r} must be smaller than radius={r}")
-            if r - float(inner_radius) < MIN_SHAPE_SIZE:
-                raise ParameterError(f"inner_radius={inner_radius!r}: the ring (radius={r:g}) must "
-                                     f"be at least {MIN_SHAPE_SIZE:g} px thick")
-            kind = "ring"
-        t = np.linspace(0, 2 * np.pi, max(32, int(2 * np.pi * r)), endpoint=False)
-        outer = np.stack([r + r * np.cos(t), r + r * np.sin(t)], 1)
-        if inner_radius is not None:
-            ri = float(inner_radius)
-            holes = (np.stack([r + ri * np.cos(t), r + ri * np.sin(t)], 1),)
-        return cls._shape([outer], 2 * r, 2 * r, margin, polarity, kind, holes=holes)
-
-    @classmethod
-    def line(cls, length, width, *, polarity="bright", margin=6.0) -> "Pattern":
-        """A straight band ``width`` pixels wide: a rope, tether, cable or pipe.
-
-        Only its two long borders are edges (its ends are not: a rope runs on
-        out of the frame), so the position along the line stays undetermined
-        and detections report the line's direction and offset instead.
-        """
-        _check_positive(length=length, width=width)
-        L, W = float(length), float(width)
-        if L < 2 * W:
-            raise ParameterError(f"line length={L} must be at least twice its width={W}")
-        poly = [(0, 0), (L, 0), (L, W), (0, W)]
-        img, m = cls._canvas(L, W, margin)
-        edge_mask = np.zeros(img.shape, bool)
-        x0, x1 = int(m + min(W, 4)), int(math.ceil(m + L - min(W, 4)))
-        edge_mask[:, x0:x1 + 1] = True
-        outline = [np.array([(0, 0), (L, 0)]), np.array([(0, W), (L, W)])]
-        p = cls._shape([poly], L, W, margin, polarity, "line", outline=outline,
-                       edge_mask=edge_mask, closed=False)
-        p.line_length, p.line_width = L, W
-        return p
-
+    circle = classmethod(_shapes.circle)
+    line = classmethod(_shapes.line)
     polyline = classmethod(_shapes.polyline)
 
     # ------------------------------------------------------------ description
@@ -395,6 +354,18 @@ class Pattern:
                 config.local_contrast, config.local_window,
                 config.pattern_blur if self.is_photo else 0.0,
                 3 if config.colour and getattr(self, "_colour", None) is not None else 2)
+
+    def grey_levels(self) -> np.ndarray:
+        """The grey levels the pattern's edges come from, as it holds them:
+        the 8-bit image when that holds them exactly (a frame of whole
+        levels: no float copy is made), else float32.
+
+        >>> p = Pattern.from_frame(np.tile(np.arange(64, dtype=np.uint8), (48, 1)) * 3)
+        >>> p.grey_levels().dtype
+        dtype('uint8')
+        """
+        g = self.__dict__.get("_gray_f")
+        return self.image if g is None else g
 
     @property
     def _gray(self) -> np.ndarray:

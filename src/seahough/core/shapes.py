@@ -1,5 +1,7 @@
-"""Open shapes: a polyline of strips (a gate frame, a chevron), drawn as
-:class:`~seahough.Pattern` draws its other primitive shapes.
+"""Shapes drawn as patterns: a polyline of strips (a gate frame, a chevron),
+and the disc, ring and line of :meth:`~seahough.Pattern.circle` and
+:meth:`~seahough.Pattern.line` (the rectangle and polygon are in
+:mod:`.pattern`).
 
 A strip ``width`` px wide runs along every segment of the polyline; the
 segments meet in mitred corners (square for a right angle, bevelled when
@@ -165,4 +167,51 @@ def polyline(cls, points, width, *, polarity="bright", margin=6.0):
     p = cls(img, None, origin, polarity=polarity, kind="polyline", outline=outer + holes,
             closed=True)
     p.polyline_points, p.polyline_width = pts, W
+    return p
+
+
+# ------------------------------------------- primitive shapes (Pattern.circle, .line)
+def circle(cls, radius, inner_radius=None, *, polarity="bright", margin=6.0):
+    """A filled disc, or a ring when ``inner_radius`` is given."""
+    from .pattern import MIN_SHAPE_SIZE, _check_positive
+    _check_positive(radius=radius)
+    r = float(radius)
+    holes = ()
+    kind = "circle"
+    if inner_radius is not None:
+        _check_positive(inner_radius=inner_radius)
+        if not float(inner_radius) < r:
+            raise ParameterError(f"inner_radius={inner_radius!r} must be smaller than radius={r}")
+        if r - float(inner_radius) < MIN_SHAPE_SIZE:
+            raise ParameterError(f"inner_radius={inner_radius!r}: the ring (radius={r:g}) must "
+                                 f"be at least {MIN_SHAPE_SIZE:g} px thick")
+        kind = "ring"
+    t = np.linspace(0, 2 * np.pi, max(32, int(2 * np.pi * r)), endpoint=False)
+    outer = np.stack([r + r * np.cos(t), r + r * np.sin(t)], 1)
+    if inner_radius is not None:
+        ri = float(inner_radius)
+        holes = (np.stack([r + ri * np.cos(t), r + ri * np.sin(t)], 1),)
+    return cls._shape([outer], 2 * r, 2 * r, margin, polarity, kind, holes=holes)
+
+def line(cls, length, width, *, polarity="bright", margin=6.0):
+    """A straight band ``width`` pixels wide: a rope, tether, cable or pipe.
+
+    Only its two long borders are edges (its ends are not: a rope runs on
+    out of the frame), so the position along the line stays undetermined
+    and detections report the line's direction and offset instead.
+    """
+    from .pattern import _check_positive
+    _check_positive(length=length, width=width)
+    L, W = float(length), float(width)
+    if L < 2 * W:
+        raise ParameterError(f"line length={L} must be at least twice its width={W}")
+    poly = [(0, 0), (L, 0), (L, W), (0, W)]
+    img, m = cls._canvas(L, W, margin)
+    edge_mask = np.zeros(img.shape, bool)
+    x0, x1 = int(m + min(W, 4)), int(math.ceil(m + L - min(W, 4)))
+    edge_mask[:, x0:x1 + 1] = True
+    outline = [np.array([(0, 0), (L, 0)]), np.array([(0, W), (L, W)])]
+    p = cls._shape([poly], L, W, margin, polarity, "line", outline=outline,
+                   edge_mask=edge_mask, closed=False)
+    p.line_length, p.line_width = L, W
     return p

@@ -266,10 +266,18 @@ def to_gray(image, *, name: str = "image", max_pixels: int = 200_000_000,
     is read by :func:`read_image` (with ``max_pixels``, ``max_memory_mb``
     and ``orientation``).
 
+    An array that is already such an image (C-contiguous HxW float32, levels
+    not all in [0, 1]) is not copied: the result is a read-only view of it
+    (a 12 MP frame's copy is 46 MB). Copy it to write into it.
+
     Examples
     --------
     >>> to_gray(np.full((10, 12, 3), 255, np.uint8)).shape
     (10, 12)
+    >>> g = np.full((10, 12), 80.0, np.float32)
+    >>> v = to_gray(g)
+    >>> bool(np.shares_memory(v, g)), v.flags.writeable
+    (True, False)
     """
     return _grey(_levels(image, name, max_pixels, min_side, max_memory_mb, orientation))
 

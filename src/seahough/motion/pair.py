@@ -70,8 +70,12 @@ class Motion:
         to the parts of the frame (a plane seen from two places; None: not
         measured).
 
-    ``confidence``, ``score`` and ``nfa`` are measured with each part of
-    the frame allowed a small shift of its own (:mod:`seahough.motion.parallax`).
+    When the similarity alone was not confident enough and the pair was
+    measured tile by tile (:mod:`seahough.motion.parallax`: a seabed in
+    relief), ``confidence``, ``score`` and ``nfa`` are those of that
+    measurement, with each part of the frame allowed a small shift of its
+    own, and ``parallax`` is how far the parts stray from the similarity
+    fitted to them.
     """
 
     matrix: np.ndarray
@@ -184,8 +188,9 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
         pattern = Pattern.from_frame(prev, config=cfg)
     except PatternError as e:
         raise PatternError(f"previous frame: {e}") from None
-    # (the pattern keeps its own copy; a large frame's float copies go at once:
-    # a 12 MP pair held 4 of them, 190 MB, through the search)
+    # (the pattern keeps its own 8-bit copy, or a float copy of fractional
+    # levels; a large frame's float copies go at once: a 12 MP pair held 4 of
+    # them, 190 MB, through the search)
     del prev
     cur = np.ascontiguousarray(cur[y0:y1, x0:x1])
     m = motion_from_pattern(pattern, cur, scale_range, angle_range,
@@ -317,9 +322,10 @@ def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
     ``max_nfa`` judges the best motion found: a weaker one is not put in
     its place.
 
-    The thresholds judge the evidence measured tile by tile
-    (:mod:`seahough.motion.parallax`): a seabed in relief is not seen the
-    same from two places, and a single similarity leaves its parallax out.
+    A pair whose similarity is not confident enough is measured again tile
+    by tile (:func:`measure_pair`): a seabed in relief is not seen the same
+    from two places, and a single similarity leaves its parallax out; the
+    thresholds then judge that measurement.
     """
     cfg = config or MOTION_CONFIG
     _check_thresholds(max_shift, min_confidence, min_score)

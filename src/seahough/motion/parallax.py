@@ -40,8 +40,8 @@ import numpy as np
 
 from ..core import kernels as K
 from ..core.keypoints import EdgePoints, find_edge_points
-from ..core.nfa import (MIN_LOG10_NFA, Background, background, evidence, log10_binom_tail,
-                        log10_tests)
+from ..core.nfa import (MIN_CHANCE, MIN_LOG10_NFA, Background, background, evidence,
+                        log10_binom_tail, log10_tests)
 from ..core.preprocess import compute_gradients
 from ..core.refine import Pose
 
@@ -67,6 +67,8 @@ SAME = 2.0
 SWITCH = 0.1
 #: Candidate poses of the search measured besides its best detection.
 CANDIDATES = 4
+#: A homography is fitted to at least this many tiles (4 fit any exactly).
+MIN_HOMOGRAPHY_TILES = 6
 #: Match radius of the score (working pixels), as the search's.
 SCORE_RADIUS = 1.5
 
@@ -140,8 +142,13 @@ def _fit_similarity(c, q, weight, known=None, keep=(False, False)):
     ss = (w * (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])).sum() / max(sxx, 1e-9)
     if any(keep):
         k = np.asarray(known, float)
-        scale = math.hypot(k[0, 0], k[1, 0]) if keep[0] else math.hypot(cc, ss)
         turn = math.atan2(k[1, 0], k[0, 0]) if keep[1] else math.atan2(ss, cc)
+        if keep[0]:
+            scale = math.hypot(k[0, 0], k[1, 0])
+        elif keep[1]:    # (the least-squares scale along the known rotation)
+            scale = cc * math.cos(turn) + ss * math.sin(turn)
+        else:
+            scale = math.hypot(cc, ss)
         cc, ss = scale * math.cos(turn), scale * math.sin(turn)
     r = np.array([[cc, -ss], [ss, cc]])
     return np.hstack([r, (mq - r @ mc)[:, None]])
@@ -159,6 +166,10 @@ def local_evidence(points, edges: EdgePoints, index: np.ndarray, matrix, bg: Bac
     ``keep`` = (scale, rotation): those known quantities of ``matrix`` are
     kept by the similarity fitted to the tiles. None when fewer than 2
     tiles are in view.
+
+    (Two neighbouring tiles that shift apart may both count the same edge
+    points of the current frame near their common border: a few per cent of
+    a tile's points at most, left in the count.)
 
     Examples
     --------
@@ -242,9 +253,12 @@ def local_evidence(points, edges: EdgePoints, index: np.ndarray, matrix, bg: Bac
             break
     res = np.hypot(*(q - (c @ sim[:, :2].T + sim[:, 2])).T)
     hom = None
-    if len(c) >= 4:
-        hom, _ = cv2.findHomography(c.astype(np.float64), q.astype(np.float64), 0)
-    tail = log10_binom_tail(k_obs, n_obs, p_sum / n_obs) if n_obs else 0.0
+    if keep.sum() >= MIN_HOMOGRAPHY_TILES:   # (the tiles the similarity kept; 4 fit exactly)
+        hom, _ = cv2.findHomography(c[keep].astype(np.float64), q[keep].astype(np.float64), 0)
+        if hom is not None and not (np.all(np.isfinite(hom)) and abs(hom[2, 2]) > 1e-9):
+            hom = None
+    tail = (log10_binom_tail(k_obs, n_obs, max(p_sum / n_obs, MIN_CHANCE)) if n_obs
+            else 0.0)
     tests = log_tests + len(c) * math.log10(max(math.pi * radius * radius, 1.0))
     return LocalEvidence(matched / max(n_all, 1), max(tests + tail, MIN_LOG10_NFA), len(c),
                          float(np.median(res)), sim, hom)
@@ -283,10 +297,13 @@ def check_locally(pattern, result, detection, region, scale_range, angle_range, 
     one with the highest score is the motion (a look-alike of a repeated
     texture, or a pose that a similarity favours only because parallax
     spoils the right one, loses here). Its confidence rates it against the
-    best of the others that lie more than :data:`RADIUS` working pixels
-    away at the frame's corners (nearer ones are the same answer, within
-    the tiles' freedom). None when too little of the frame is in view to
-    cut it into tiles.
+    best of the others that lie more than :data:`SAME` working pixels away
+    at the frame's corners (nearer ones are the same answer), and never
+    above how distinct the vote found it (``distinct``: ``1 - runner-up /
+    answer`` of their working-scale scores). The matrix is the similarity
+    fitted to the chosen pose's tile shifts; ``parallax`` is measured
+    against it. None when too little of the frame is in view to cut it
+    into tiles.
     """
     feats = result.features
     if feats is None:
@@ -294,7 +311,9 @@ def check_locally(pattern, result, detection, region, scale_range, angle_range, 
     fx, fy, factor = feats.gradients.fx, feats.gradients.fy, result.factor
     tol = math.radians(config.angle_tolerance)
     radius = max(1.25, config.match_radius * factor)   # (the search's evidence radius)
-    grad = compute_gradients(np.asarray(pattern.image, np.float32), factor, config.equalize)
+    # (the pattern's own levels: 8 bits are downscaled as they are, not copied
+    # to float at full resolution; a frame pattern is grey)
+    grad = compute_gradients(pattern.grey_levels(), factor, config.equalize)
     points = strongest(find_edge_points(grad, config.min_gradient))
     bg = background(feats.edges, radius, tol, None, feats.index)
     x0, y0, x1, y1 = region

@@ -219,16 +219,19 @@ def measure_across(reader, p: int, q: int, scale_range, angle_range, config, tun
     ar = (a0 * n,) * 2 if a0 == a1 else (a0 * m, a1 * m)
     if ar[1] - ar[0] > 360:
         ar = (-180.0, 180.0)
+    # (the run's own confidence threshold: a pair the similarity cannot vouch
+    # for is then measured tile by tile, as run_odometry's full searches are)
+    kw = dict(max_shift=min(1.5, tuning.full_shift * m), min_score=tuning.min_score,
+              max_nfa=math.inf, config=config)
     try:
         mo = estimate_motion(reader.raw(p), reader.raw(q), sr, ar,
-                             max_shift=min(1.5, tuning.full_shift * m), min_confidence=0.0,
-                             min_score=tuning.min_score, max_nfa=math.inf, config=config)
+                             min_confidence=tuning.min_confidence, **kw)
+        if mo is None:   # why: nothing found, or nothing distinct enough
+            loose = estimate_motion(reader.raw(p), reader.raw(q), sr, ar, min_confidence=0.0,
+                                    **kw)
+            return None, "no_match" if loose is None else "low_confidence"
     except (SeahoughError, OSError):
         return None, "no_match"
-    if mo is None:
-        return None, "no_match"
-    if mo.confidence < tuning.min_confidence:
-        return None, "low_confidence"
     if mo.overlap < tuning.min_overlap:
         return None, "little_overlap"
     return mo, ""

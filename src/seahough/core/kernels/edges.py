@@ -41,7 +41,7 @@ def _across(mag, i, w, ggx, ggy):
 
 
 @njit(cache=CACHE, nogil=True)
-def edge_points(mag, gx, gy, phase, floor, mask):
+def edge_points(mag, gx, gy, phase, floor, mask, row0=0):
     """Non-maximum suppression across the edge, with sub-pixel position.
 
     ``phase`` is the gradient direction image (radians, [0, 2 pi)).
@@ -112,7 +112,7 @@ def edge_points(mag, gx, gy, phase, floor, mask):
             elif off < -0.5:
                 off = -0.5
         xs[j] = x + off * sx
-        ys[j] = y + off * sy
+        ys[j] = (y + row0) + off * sy   # (row0: the image's row of this one's 0)
         an[j] = fph[i]
         mg[j] = m
         ix[j] = x
