@@ -50,6 +50,10 @@ def test_only_small_texture_patterns_take_more_key_points():
     large = seahough.Detector(seahough.Pattern(sim.seabed((480, 640), seed=3)[:300, :400]),
                               scale_range=(0.85, 1.15))
     assert large._n_keypoints(frame, 0.25) is None
+    # (a 120 px patch in a 640x480 view: about 28 of the 1,200 fall on it already)
+    fragment = seahough.Detector(seahough.Pattern(sim.seabed((480, 640), seed=3)[:120, :120]),
+                                 scale_range=(0.7, 1.4))
+    assert fragment._n_keypoints((480, 640), 0.5) is None
     shape = seahough.Detector(seahough.Pattern.rectangle(40, 24), scale_range=(0.85, 1.15))
     assert shape._n_keypoints(frame, 0.25) is None
     assert seahough.Detector(seahough.Pattern.from_frame(patch))._n_keypoints(frame, 0.25) is None
