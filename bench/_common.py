@@ -91,3 +91,21 @@ def write_page(text: str, out) -> None:
     Path(out).parent.mkdir(parents=True, exist_ok=True)
     Path(out).write_text(text + "\n")
     print(f"written to {out}", file=sys.stderr, flush=True)
+
+
+def publish(text: str, args, doc) -> None:
+    """Print a benchmark's page, and write it to ``args.out``, or to ``doc``
+    with ``args.write``."""
+    print(text)
+    out = args.out or (doc if args.write else None)
+    if out:
+        write_page(text, out)
+
+
+def page_head(title: str, seconds: float) -> list[str]:
+    """A page's first lines: title, command, date, machine, threads and run time."""
+    import datetime
+    return [f"# {title}", "", f"Command: `{command()}`  ",
+            f"Date: {datetime.date.today().isoformat()}  ", f"Machine: {machine()}  ",
+            f"Single-threaded; {steady_allocator()} Whole run: {seconds:.0f} s.", ""]
+

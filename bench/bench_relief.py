@@ -35,7 +35,6 @@ truth.
 from __future__ import annotations
 
 import argparse
-import datetime
 import math
 import sys
 import tempfile
@@ -43,7 +42,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import command, machine, steady_allocator, write_page  # noqa: E402
+from _common import page_head, publish  # noqa: E402
 
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
@@ -134,12 +133,8 @@ def strong_cells(recs, method):
 
 
 def page(recs, runs, seconds: float, quick: bool) -> str:
-    lines = ["# Survey pairs over a seabed in relief (rendered, exact truth)", "",
-             f"Command: `{command()}`  ",
-             f"Date: {datetime.date.today().isoformat()}  ",
-             f"Machine: {machine()}  ",
-             f"Single-threaded; {steady_allocator()} Whole run: {seconds:.0f} s.", "",
-             "Split by photo: tune part = " + ", ".join(TUNE) + "; test part = "
+    lines = page_head("Survey pairs over a seabed in relief (rendered, exact truth)", seconds)
+    lines += ["Split by photo: tune part = " + ", ".join(TUNE) + "; test part = "
              + ", ".join(TEST) + ". Targets are judged on the test part only.", "",
              "How it is made and measured: bench/bench_relief.py's docstring. A pair is scored "
              f"when the parallax its best similarity leaves is at most {100 * SCORED:.1f} % of "
@@ -226,10 +221,7 @@ def main(argv=None) -> int:
         runs.append(dead_reckoning(photo, part, seed))
         R.log(f"{photo} seed {seed}: {time.time() - t:.0f} s")
     text = page(recs, runs, time.time() - t0, args.quick)
-    print(text)
-    out = args.out or (DOC if args.write else None)
-    if out:
-        write_page(text, out)
+    publish(text, args, DOC)
     return 0
 
 

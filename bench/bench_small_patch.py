@@ -25,7 +25,6 @@ are the photo at 1280 px wide and at its own size (1920x1080; the wreck
 from __future__ import annotations
 
 import argparse
-import datetime
 import math
 import sys
 import time
@@ -33,7 +32,7 @@ import zlib
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import command, machine, steady_allocator, write_page  # noqa: E402
+from _common import page_head, publish  # noqa: E402
 
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
@@ -134,11 +133,8 @@ def _cells(recs, method):
 
 
 def page(recs, seconds: float, quick: bool) -> str:
-    lines = ["# A small seabed patch in a large frame", "",
-             f"Command: `{command()}`  ", f"Date: {datetime.date.today().isoformat()}  ",
-             f"Machine: {machine()}  ",
-             f"Single-threaded; {steady_allocator()} Whole run: {seconds:.0f} s.", "",
-             "Split by photo: tune part = " + ", ".join(TUNE) + "; test part = "
+    lines = page_head("A small seabed patch in a large frame", seconds)
+    lines += ["Split by photo: tune part = " + ", ".join(TUNE) + "; test part = "
              + ", ".join(TEST) + ". How the cases are made: bench/bench_small_patch.py's "
              f"docstring. Found = within {GOOD_PX:g} px of the true patch centre; wrong = an "
              "answer farther off.", ""]
@@ -184,10 +180,7 @@ def main(argv=None) -> int:
     recs = [measure(c, patch, scene)
             for p, part in jobs for c, patch, scene in cases(p, part, n, sides)]
     text = page(recs, time.time() - t0, args.quick)
-    print(text)
-    out = args.out or (DOC if args.write else None)
-    if out:
-        write_page(text, out)
+    publish(text, args, DOC)
     return 0
 
 
