@@ -109,3 +109,14 @@ def page_head(title: str, seconds: float) -> list[str]:
             f"Date: {datetime.date.today().isoformat()}  ", f"Machine: {machine()}  ",
             f"Single-threaded; {steady_allocator()} Whole run: {seconds:.0f} s.", ""]
 
+
+def page_parser(doc: str, page: str, quick: str):
+    """The arguments every page-writing benchmark takes: ``--write`` (to
+    ``docs/<page>``), ``--quick`` (``quick`` says what it runs), ``--out``."""
+    import argparse
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("--write", action="store_true", help=f"write docs/{page}")
+    ap.add_argument("--quick", action="store_true", help=quick)
+    ap.add_argument("--out", type=Path, help="write the page here")
+    return ap
+

@@ -34,7 +34,6 @@ truth.
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 import tempfile
@@ -42,7 +41,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import page_head, publish  # noqa: E402
+from _common import page_head, page_parser, publish  # noqa: E402
 
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
@@ -197,10 +196,7 @@ def page(recs, runs, seconds: float, quick: bool) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--write", action="store_true", help="write docs/relief.md")
-    ap.add_argument("--quick", action="store_true", help="a smoke run: 2 sequences, half size")
-    ap.add_argument("--out", type=Path, help="write the page here")
+    ap = page_parser(__doc__, "relief.md", "a smoke run: 2 sequences, half size")
     ap.add_argument("--part", choices=("tune", "test", "both"), default="both",
                     help="render and measure only this part (tuning: --part tune)")
     args = ap.parse_args(argv)

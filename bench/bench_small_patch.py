@@ -24,7 +24,6 @@ are the photo at 1280 px wide and at its own size (1920x1080; the wreck
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 import time
@@ -32,7 +31,7 @@ import zlib
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import page_head, publish  # noqa: E402
+from _common import page_head, page_parser, publish  # noqa: E402
 
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
@@ -164,10 +163,7 @@ def page(recs, seconds: float, quick: bool) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--write", action="store_true", help="write docs/small_patch.md")
-    ap.add_argument("--quick", action="store_true", help="a smoke run")
-    ap.add_argument("--out", type=Path, help="write the page here")
+    ap = page_parser(__doc__, "small_patch.md", "a smoke run")
     args = ap.parse_args(argv)
     if shared_data_dir() is None:
         print("bench_small_patch: ../shared/data not found", file=sys.stderr)

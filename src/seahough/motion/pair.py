@@ -254,7 +254,6 @@ class PairMeasure:
     nfa: float
     parallax: float = float("nan")
     homography: np.ndarray | None = None
-    local: bool = False         # measured tile by tile
 
     def pose(self, origin) -> tuple[float, float, float, float]:
         """``(x, y, scale, angle)`` of the previous frame's ``origin``."""
@@ -290,25 +289,25 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
                    search_region=region)
     res = det.search(gray, features=features)
     d = res.detections[0] if res.detections else None
+    # the similarity's own answer (None: the search found none)
+    own = None if d is None else PairMeasure(np.asarray(d.matrix, float), d.confidence,
+                                              d.score, d.nfa)
     if d is not None and d.confidence >= min_confidence:
-        out = PairMeasure(np.asarray(d.matrix, float), d.confidence, d.score, d.nfa)
         if tiles:   # (the answer's own tiles: no other candidate)
             check = check_locally(pattern, res, d, region, scale_range, angle_range, config,
                                   candidates=0)
             if check is not None:
-                out.parallax, out.homography = check.parallax, check.homography
-        return out
+                own.parallax, own.homography = check.parallax, check.homography
+        return own
     if not (rescue and res.candidates):
-        return None if d is None else PairMeasure(np.asarray(d.matrix, float), d.confidence,
-                                                  d.score, d.nfa)
+        return own
     check = check_locally(pattern, res, d, region, scale_range, angle_range, config)
     if check is None or check.distinct < RESCUE_DISTINCT:
         # (a peak the vote hardly prefers to its runner-up is a look-alike of a
         # repeated texture as often as a view spoilt by parallax: not rescued)
-        return None if d is None else PairMeasure(np.asarray(d.matrix, float), d.confidence,
-                                                  d.score, d.nfa)
+        return own
     return PairMeasure(check.matrix, check.confidence, check.score, check.nfa, check.parallax,
-                       check.homography, local=True)
+                       check.homography)
 
 
 def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
