@@ -77,18 +77,21 @@ def log(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
 
-#: Config.chain_length of every variant (``--chain``; 0: key points by contrast alone)
-CHAIN = 0.0
+#: Config.chain_length of every variant (``--chain``; None: the default Config's;
+#: 0: key points by contrast alone). The grey and the colour variants always
+#: share it: a grey image searched with ``colour=True`` must be searched as before.
+CHAIN = None
 
 
 def grey_config():
-    return seahough.Config(chain_length=CHAIN) if CHAIN else seahough.Config()
+    return seahough.Config() if CHAIN is None else seahough.Config(chain_length=CHAIN)
 
 
 def colour_config():
     """``Config(colour=True)``, or None when this seahough has no colour search."""
     try:
-        return seahough.Config(colour=True, chain_length=CHAIN)
+        return (seahough.Config(colour=True) if CHAIN is None
+                else seahough.Config(colour=True, chain_length=CHAIN))
     except (TypeError, seahough.SeahoughError):
         return None
 
@@ -514,8 +517,8 @@ def main(argv=None) -> str:
     ap.add_argument("--part", choices=("tune", "test", "both"), default="both")
     ap.add_argument("--polarity", choices=("either", "same"), default="either",
                     help="the pattern's polarity (default either)")
-    ap.add_argument("--chain", type=float, default=0.0,
-                    help="Config.chain_length of every variant (default 0: off)")
+    ap.add_argument("--chain", type=float, default=None,
+                    help="Config.chain_length of every variant (default: the Config's own; 0: off)")
     ap.add_argument("--write", action="store_true",
                     help=f"write {DOC.relative_to(ROOT)} and {PICTURE.relative_to(ROOT)}")
     ap.add_argument("--out", default=None, help="write the report here instead")
