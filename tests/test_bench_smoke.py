@@ -3,6 +3,7 @@ table is there with sane numbers (no thresholds on the results)."""
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import subprocess
@@ -272,3 +273,122 @@ def test_robosub_benchmark_quick(tmp_path):
             assert int(r[col["of which on other props"]]) <= int(false), r
             assert photos == "3", r                           # the quick run's 3 test photos
             assert float(r[col["test ms"]]) > 0, r
+
+
+
+def _run_python(code: str) -> str:
+    """Run ``code`` in a fresh interpreter with bench/ on the path (bench code
+    sets single-thread limits at import: not in this test process); its
+    stdout."""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), str(ROOT / "bench"),
+                                         env.get("PYTHONPATH", "")])
+    proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True,
+                          text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return proc.stdout
+
+
+def test_nfa_calibration_benchmark_quick():
+    """bench_nfa --quick --fit completes: the fitted constants, the tables
+    before and after by kind of search, the defaults' false alarms; every
+    count is a rate per search."""
+    text = _run_python("import bench_nfa; bench_nfa.main(['--quick', '--fit'])")
+    assert re.search(r"Fitted on the tune part's whole-image marker searches: DEPENDENCE [\d.]+, "
+                     r"LOG10_TESTS_SHARE -?[\d.]+", text)
+    assert "The same with the calibrated model" in text
+    assert "False alarms per search at the defaults" in text
+    for k in ("marker, whole image", "rope (line 96 x 8)", "L in a window",
+              "cross in a window, pose known"):
+        assert f"| {k} |" in text, k
+    rates = 0
+    for line in text.splitlines():
+        if line.startswith("| tune |") or line.startswith("| test |"):
+            for cell in line.strip().strip("|").split("|")[3:]:
+                v = cell.split()[0] if cell.strip() else ""
+                if re.fullmatch(r"\d+\.\d{3}", v):
+                    assert 0.0 <= float(v) < 20.0, line
+                    rates += 1
+    assert rates > 50
+
+
+FIT_CHECK = """
+import math, json
+import numpy as np
+import bench_nfa as b
+from seahough.core import nfa as N
+from seahough.core.keypoints import find_edge_points
+from seahough.core.preprocess import compute_gradients
+from seahough.core.refine import Pose
+from seahough import sim
+
+# 1. the stored evidence re-read at (d, sh) is what the product computes there
+g = sim.seabed((240, 320), seed=3)[:, :, 1].astype(np.float32)
+e = find_edge_points(compute_gradients(g), 30.0)
+idx = e.index_map()
+tol = math.radians(15)
+bg = N.background(e, 1.25, tol, None, idx)
+rng = np.random.default_rng(4)
+t = np.linspace(0, 2 * math.pi, 240, endpoint=False)
+vx, vy = 50 * np.cos(t), 30 * np.sin(t)
+vang = (t + math.pi / 2) % (2 * math.pi)
+gaps = []
+for i in range(12):
+    pose = Pose.from_params(rng.uniform(60, 260), rng.uniform(40, 200), rng.uniform(0.6, 1.4),
+                            rng.uniform(0, 2 * math.pi))
+    for tests in (0.5, 3.0, 9.0):
+        used = (N.DEPENDENCE, N.LOG10_TESTS_SHARE)
+        try:
+            N.LOG10_TESTS_SHARE = 0.0
+            raw = {}
+            for d in b.DEPENDENCES:
+                N.DEPENDENCE = d
+                raw[str(float(d))] = N.evidence(pose, vx, vy, vang, e, idx, bg, tests, tol=tol,
+                                                either=False).log10_nfa
+            row = {"log_tests": tests, "log10_nfa": raw}
+            for d in (4.0, 16.0):
+                for sh in (-7.5, -2.0, 0.0):
+                    N.DEPENDENCE, N.LOG10_TESTS_SHARE = d, sh
+                    want = N.evidence(pose, vx, vy, vang, e, idx, bg, tests, tol=tol,
+                                      either=False).log10_nfa
+                    gaps.append(abs(float(b.log_nfa([row], d, sh)[0]) - want))
+        finally:
+            N.DEPENDENCE, N.LOG10_TESTS_SHARE = used
+print("gap", max(gaps))
+
+# 2. the fit finds the constants that keep the promise on the tune part, and
+# ignores the test part and the pool photos (made to prefer other constants)
+rng = np.random.default_rng(0)
+rows, searches = [], []
+def add(group, split, share_ok, n=3000):
+    for u in rng.uniform(0.0, 1.0, n):
+        # one detection a search, log10 NFA = log10(U) at (8, share_ok): P[NFA <= e] = e
+        tail8 = math.log10(u) - (5.0 + share_ok)
+        raw = {str(float(d)): 5.0 + tail8 * 8.0 / d for d in b.DEPENDENCES}
+        rows.append({"group": group, "split": split, "pattern": "L", "score": 0.6,
+                     "log_tests": 5.0, "log10_nfa": raw})
+        searches.append((group, split, "L"))
+add("seabed photos", "tune", -2.0)
+add("seabed photos", "test", -4.0)
+add("pool photos (RoboSub)", "test", -1.0)
+data = {"rows": rows, "searches": searches}
+print("fit", json.dumps(b.fit(data)))
+sel = lambda g, s, p: s == "tune"
+_, obs = b.counts(data, sel, 8.0, -2.0)
+_, old = b.counts(data, sel, 4.0, 0.0)
+print("band", all(b.in_band(obs[x], x) for x in b.PROMISED),
+      all(b.in_band(old[x], x) for x in b.PROMISED))
+"""
+
+
+def test_nfa_fit_reads_the_evidence_and_keeps_the_promise():
+    """bench_nfa re-reads each detection's stored evidence at any (DEPENDENCE,
+    LOG10_TESTS_SHARE) exactly as the product computes it (floored at one try,
+    at the floor of 1e-300 and with no observation); and its fit, on made-up
+    detections that keep the promise only at DEPENDENCE 8 and a share of -2 on
+    the tune part, returns those, whatever the test part and the pool prefer."""
+    out = _run_python(FIT_CHECK)
+    gap = float(re.search(r"gap (\S+)", out).group(1))
+    assert gap < 1e-9, out
+    assert json.loads(re.search(r"fit (.+)", out).group(1)) == [8.0, -2.0], out
+    assert "band True False" in out, out

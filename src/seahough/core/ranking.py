@@ -289,6 +289,15 @@ def judge(ctx: SearchContext, c: Candidate) -> None:
     box = (math.floor(mx.min()) - m, math.floor(my.min()) - m,
            math.ceil(mx.max()) + m + 1, math.ceil(my.max()) + m + 1)
     bg = background(feats.edges, radius, tol, box, feats.index)
+    c.evidence = evidence(c.fit.pose, pf.vx, pf.vy, pf.vangle, feats.edges, feats.index,
+                          bg, search_tests(ctx), tol=tol, either=ctx.pattern.either,
+                          spacing=pf.spacing)
+
+
+def search_tests(ctx: SearchContext) -> float:
+    """log10 of the distinct poses the search could have answered with
+    (:func:`~.nfa.log10_tests` over its accumulator's region and ranges)."""
+    pf = ctx.pf
     b = ctx.bins
     area = (b.nx - 1) * (b.ny - 1) * b.step * b.step
     period = 180.0 if ctx.pattern.is_line else 360.0
@@ -298,12 +307,10 @@ def judge(ctx: SearchContext, c: Candidate) -> None:
     length = ctx.pattern.line_length * ctx.factor if line else 0.0
     # (a disc searched at one rotation still counts the rotations asked for:
     # the calibration of docs/nfa.md was fitted so; counting one, false alarms
-    # of discs and rings on real photos rose from 0.14 to 0.24 a search)
+    # of discs and rings on real photos rose from 0.14 to 0.24 a search, with
+    # the bound model of the seventh session)
     angles = ctx.asked_angles or ctx.angle_range
-    tests = log10_tests(area, pf.radius, ctx.scale_range, angles, period, span, width,
-                        length)
-    c.evidence = evidence(c.fit.pose, pf.vx, pf.vy, pf.vangle, feats.edges, feats.index,
-                          bg, tests, tol=tol, either=ctx.pattern.either, spacing=pf.spacing)
+    return log10_tests(area, pf.radius, ctx.scale_range, angles, period, span, width, length)
 
 
 def to_detection(ctx: SearchContext, c: Candidate, conf: float, shape) -> Detection:
