@@ -418,7 +418,7 @@ def report(parts: dict, args, elapsed: float, allocator: str, ran: list[str]) ->
     ]
     if not test:
         lines.append("No test scenes ran.")
-        return "\n".join(lines)
+        return "\n".join(lines + tune_section(parts.get("tune", [])))
     n_cell = args.n
     lines += [
         "## Headline (test part)", "",
@@ -454,13 +454,18 @@ def report(parts: dict, args, elapsed: float, allocator: str, ran: list[str]) ->
         "The same scenes made grey, pattern made grey: the colour search must change nothing.", "",
         grey_images(test), "",
     ]
-    tune = parts.get("tune", [])
-    if tune:
-        lines += ["## Tune part", "", f"{len(tune)} scenes on {len({r['photo'] for r in tune})} "
-                  "tune photos (the same cells).", "", headline(tune), "",
-                  "By marker kind and water:", "", by_marker_water(tune), "",
-                  "Grey contrast at the border:", "", contrast_distribution(tune), ""]
-    return "\n".join(lines)
+    return "\n".join(lines + tune_section(parts.get("tune", [])))
+
+
+def tune_section(tune) -> list:
+    """The page's lines on the tune part (none when it did not run)."""
+    if not tune:
+        return []
+    return ["## Tune part", "", f"{len(tune)} scenes on {len({r['photo'] for r in tune})} "
+            "tune photos (the same cells).", "", headline(tune), "",
+            "By marker kind and water:", "", by_marker_water(tune), "",
+            "How the best answer went:", "", outcomes(tune), "",
+            "Grey contrast at the border:", "", contrast_distribution(tune), ""]
 
 
 def picture(rows, path: Path) -> str:

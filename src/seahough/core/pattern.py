@@ -22,8 +22,8 @@ from ..errors import ParameterError, PatternError
 from .features import extract_features
 from ..io.images import to_gray
 from . import pattern_io as _pio
-from .keypoints import chain_share, edge_points_near_image
-from .preprocess import choose_factor
+from .keypoints import chain_share, edge_points_near_image, find_edge_points
+from .preprocess import choose_factor, compute_gradients
 from . import shapes as _shapes
 
 POLARITIES = ("bright", "dark", "either")
@@ -405,6 +405,25 @@ class Pattern:
                                  mask=self._edge_mask)
             share = chain_share(f.edges, max(config.chain_length, 1.0), f.index)
             self._cache.setdefault(key, share >= LONG_BORDERS)
+        return self._cache[key]
+
+    def near_turns(self, config: Config | None = None) -> tuple:
+        """The quarter and half turns that map most, not all, of the pattern's
+        edges onto its own (:func:`.symmetry.near_turns`; a marker board's
+        frame): ``((theta, cx, cy), ...)`` in radians and full-resolution
+        pattern pixels (cached; none for frames and lines)."""
+        if self.is_frame or self.is_line:
+            return ()
+        config = config or Config()
+        key = ("near turns",) + self._features_key(1.0, config) + (config.angle_tolerance,)
+        if key not in self._cache:
+            from .symmetry import near_turns
+            f = self.features(1.0, config)
+            # (the sampled points against all the pattern image's edges)
+            e = find_edge_points(compute_gradients(self._gray, 1.0, config.equalize),
+                                 config.min_gradient)
+            self._cache[key] = near_turns(f.vx, f.vy, f.vangle, e, e.index_map(), self.origin,
+                                          tol=math.radians(config.angle_tolerance))
         return self._cache[key]
 
     def finish_points(self, factor: float, config: Config | None = None):

@@ -19,6 +19,7 @@ from .features import Features
 from .keypoints import edge_points_near_image
 from .nfa import CELL, background, evidence, log10_tests
 from .refine import Fit, Pose, refine
+from .symmetry import turn_pose
 
 #: Flag on line detections: the position along the line is not measured.
 FLAG_ALONG_LINE = "position_along_line_undetermined"
@@ -157,10 +158,12 @@ def _full_radius(factor: float) -> float:
     return max(1.0 / factor, 2.0)
 
 
-def _full_edges(ctx: SearchContext, gray, todo):
+def _full_edges(ctx: SearchContext, gray, todo, turns=()):
     """Full-resolution edges near each candidate's pattern points, in a
     box around them: one box around all candidates when that is cheaper
-    than one box each. Returns ``(box, edges, index)`` per candidate.
+    than one box each (``turns``: also near the points of each candidate's
+    turned poses, :func:`_try_turns`). Returns ``(box, edges, index)`` per
+    candidate.
 
     Edges farther from the pattern's points than the refinement's match
     radius plus the distance it may move the pose could never be matched:
@@ -171,7 +174,13 @@ def _full_edges(ctx: SearchContext, gray, todo):
     if vx.size < cfg.search.min_finish_points:  # (no edges at full resolution)
         return [None] * len(todo)
     H, W = gray.shape[:2]  # (a colour image: HxWx3)
-    pts = [_full_pose(c.fit, ctx.features).map(vx, vy) for c in todo]
+    pts = []
+    for c in todo:  # (and where its turns would put them: see _try_turns)
+        poses = [c.fit.pose] + [turn_pose(c.fit.pose, t, cx * factor, cy * factor)
+                                for t, cx, cy in turns]
+        mapped = [_full_pose(Fit(q, 0.0, 0, 0.0, 0.0), ctx.features).map(vx, vy) for q in poses]
+        pts.append((np.concatenate([m[0] for m in mapped]),
+                    np.concatenate([m[1] for m in mapped])))
     band_r = int(math.ceil(_full_radius(factor) + cfg.search.band_slack))
     m = band_r + 4
     boxes = [(int(max(0, math.floor(mx.min()) - m)), int(max(0, math.floor(my.min()) - m)),
@@ -227,6 +236,34 @@ def _full_res(ctx: SearchContext, fit: Fit, gray, where=None) -> Fit:
                   score_radius=cfg.match_radius)
 
 
+def _try_turns(ctx: SearchContext, c: Candidate, turns, gray, where) -> None:
+    """Replace the candidate's pose by its pose turned by a near symmetry of
+    the pattern (:mod:`.symmetry`) when that scores highest at full
+    resolution: the part the turn maps onto itself scores alike, so the
+    pattern's other details decide. Each turn starts from the candidate's
+    own pose; a turn outside the searched angles is not tried."""
+    pf, feats, cfg = ctx.pf, ctx.features, ctx.config
+    base, f = c.fit, ctx.factor
+    s0, s1 = ctx.scale_range
+    best = None
+    for theta, cx, cy in turns:
+        start = turn_pose(base.pose, theta, cx * f, cy * f)
+        if ctx.compare.outside_ranges(math.sqrt(s0 * s1), start.angle):
+            continue   # (a turn the caller did not search)
+        # (scored as the candidates are: candidates.find_candidates)
+        work = refine(start, pf.vx, pf.vy, pf.vangle, feats.edges, feats.index,
+                      radii=(1.5, 1.25) if cfg.refine else (), iterations=3,
+                      angle_tol=math.radians(cfg.angle_tolerance), either=ctx.pattern.either,
+                      fix_scale=ctx.scale_known, score_radius=max(1.25, cfg.match_radius * f))
+        if not ctx.compare.pose_ok(work.pose):
+            continue
+        full = _full_res(ctx, work, gray, where)
+        if full.score > (c.full.score if best is None else best[1].score):
+            best = (work, full)
+    if best is not None:
+        c.fit, c.work_score, c.full = best[0], best[0].score, best[1]
+
+
 # ------------------------------------------------------------------- ranking
 def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: float) -> list:
     """Refine the promising candidates at full resolution, rank them by
@@ -240,10 +277,13 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
     best = max((c.work_score for c in cands), default=0.0)
     pre = max(0.85 * ctx.min_score, 0.6 * best)  # only those that could win
     todo = [c for c in cands if c.work_score >= pre][: ctx.max_results + 2]
-    wheres = (_full_edges(ctx, gray, todo) if todo and ctx.factor < 0.999
+    turns = () if ctx.angle_known else ctx.pattern.near_turns(ctx.config)
+    wheres = (_full_edges(ctx, gray, todo, turns) if todo and ctx.factor < 0.999
               else [None] * len(todo))
     for c, where in zip(todo, wheres):
         c.full = _full_res(ctx, c.fit, gray, where)
+        if turns:   # (a board's frame: its cells decide the turn)
+            _try_turns(ctx, c, turns, gray, where)
     # rank by both scores: the working scale's is smoother (less pixel
     # noise, JPEG, snow), the full resolution's sharper
     todo.sort(key=lambda c: -(c.full.score + c.work_score))

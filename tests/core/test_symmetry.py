@@ -1,0 +1,127 @@
+"""Near symmetries: a marker board's frame falls on itself turned by a
+quarter; the ranking lets its cells decide the turn."""
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+import seahough
+from seahough import sim
+from seahough.core import detector as detector_module
+from seahough.core import ranking
+from seahough.core import symmetry as Y
+from seahough.core.refine import Pose
+
+
+@pytest.mark.parametrize("name,turns", [("board", 3), ("L", 0), ("cross", 0), ("rectangle", 0)])
+def test_only_the_board_has_near_turns(name, turns):
+    img, mask = sim.marker(name, 120)
+    p = seahough.Pattern.from_image(img, mask=mask)
+    found = p.near_turns()
+    assert len(found) == turns
+    if turns:
+        assert sorted(round(math.degrees(t[0])) for t in found) == [90, 180, 270]
+        # about the board's centre (its origin: the image centre)
+        assert all(abs(t[1]) < 1.0 and abs(t[2]) < 1.0 for t in found)
+    # lines and frames are never turned
+    assert seahough.Pattern.line(100, 8).near_turns() == ()
+    assert seahough.Pattern.from_frame(sim.seabed((120, 160), seed=1)).near_turns() == ()
+
+
+@pytest.mark.parametrize("w,h", [(300, 300), (600, 600), (600, 300)])
+def test_exact_symmetries_of_large_shapes_are_not_near(w, h):
+    # (their sampled points are not symmetric themselves: the edges are)
+    assert seahough.Pattern.rectangle(w, h).near_turns() == ()
+
+
+def test_turn_pose_puts_the_turned_pattern_where_the_pose_put_the_pattern():
+    rng = np.random.default_rng(0)
+    vx, vy = rng.uniform(-30, 30, 50), rng.uniform(-20, 20, 50)
+    pose = Pose.from_params(200.0, 150.0, 1.3, math.radians(25))
+    for theta, cx, cy in ((math.pi / 2, 3.0, -2.0), (math.pi, 0.0, 0.0), (1.5 * math.pi, -4, 1)):
+        c, s = math.cos(theta), math.sin(theta)
+        rx, ry = cx + c * (vx - cx) + s * (vy - cy), cy - s * (vx - cx) + c * (vy - cy)
+        a = Y.turn_pose(pose, theta, cx, cy).map(vx, vy)
+        b = pose.map(rx, ry)
+        np.testing.assert_allclose(a, b, atol=1e-9)
+
+
+@pytest.mark.parametrize("shape", [(240, 320), (960, 1280)])
+def test_a_candidate_found_turned_comes_back_to_the_right_turn(monkeypatch, shape):
+    """Every candidate the search ranks is handed over turned by a quarter
+    (the frame fits, the cells do not): the ranking turns it back, at full
+    resolution and below it (a large image searched at a smaller scale)."""
+    img, mask = sim.marker("board", 120)
+    pattern = seahough.Pattern.from_image(img, mask=mask)
+    scene = np.full(shape, 70, np.uint8)
+    truth = (shape[1] / 2 + 10.5, shape[0] / 2 - 7.5, 1.3 if shape[0] > 500 else 1.0, 35.0)
+    m = seahough.geometry.pose_to_matrix(*truth, pattern.origin)
+    warped = cv2.warpAffine(img, m, (shape[1], shape[0]), flags=cv2.INTER_LINEAR)
+    inside = cv2.warpAffine(np.where(mask > 0, 255, 0).astype(np.uint8), m, (shape[1], shape[0]))
+    scene = np.where(inside > 127, warped, scene).astype(np.uint8)
+    real = ranking.rank
+    turns = pattern.near_turns()
+
+    def turned_rank(ctx, cands, gray, min_confidence):
+        for c in cands:
+            (theta, cx, cy), = [t for t in turns if abs(math.degrees(t[0]) - 90) < 1]
+            q = Y.turn_pose(c.fit.pose, theta, cx * ctx.factor, cy * ctx.factor)
+            c.fit = ranking.Fit(q, c.fit.score, c.fit.matched, c.fit.rms, c.fit.inside)
+        return real(ctx, cands, gray, min_confidence)
+
+    monkeypatch.setattr(detector_module, "rank", turned_rank)
+    d = seahough.Detector(pattern, (0.8, 1.6)).detect(scene)[0]
+    assert math.hypot(d.x - truth[0], d.y - truth[1]) < 1.5
+    assert abs((d.angle - truth[3] + 180) % 360 - 180) < 1.5
+    # (not vacuous: without the turns the quarter turn handed over stays)
+    turns = pattern.near_turns()
+    monkeypatch.setattr(seahough.Pattern, "near_turns",
+                        lambda self, config=None: turns if self is not pattern else ())
+    d = seahough.Detector(pattern, (0.8, 1.6)).detect(scene)[0]
+    assert abs((d.angle - truth[3] + 180) % 360 - 180) > 80
+
+
+def _boards(n=16):
+    """Hard board scenes (coastal and moderate water, 3 m): the cells are faint."""
+    img, mask = sim.marker("board", 120, colour=sim.PAINTS["orange"])
+    det = seahough.Detector(seahough.Pattern.from_image(img, mask=mask, polarity="either"),
+                            (0.5, 2.0), (0.0, 360.0), config=seahough.Config(colour=True))
+    for seed in range(n):
+        scene, _, truth = sim.colour_marker_scene("board", paint="orange", distance=3.0,
+                                                  water=("coastal", "moderate")[seed % 2],
+                                                  seed=7000 + seed, source="procedural")
+        yield det, scene, truth
+
+
+def _right(found, truth) -> bool:
+    if not found:
+        return False
+    d = found[0]
+    da = abs((d.angle - truth.angle + 180.0) % 360.0 - 180.0)
+    return math.hypot(d.x - truth.x, d.y - truth.y) <= 3.0 and da <= 5.0
+
+
+def test_the_cells_decide_the_turn_of_a_board(monkeypatch):
+    """On faint boards the vote often picks a turned frame; trying the turns
+    finds more of them at the right angle, and never fewer."""
+    with_turns = [_right(det.detect(scene), truth) for det, scene, truth in _boards()]
+    monkeypatch.setattr(seahough.Pattern, "near_turns", lambda self, config=None: ())
+    without = [_right(det.detect(scene), truth) for det, scene, truth in _boards()]
+    assert sum(with_turns) > sum(without)
+    assert sum(w and not t for w, t in zip(without, with_turns)) <= 1
+
+
+def test_a_known_angle_is_never_turned(monkeypatch):
+    calls = []
+    real = ranking.turn_pose
+    monkeypatch.setattr(ranking, "turn_pose", lambda *a: calls.append(a) or real(*a))
+    img, mask = sim.marker("board", 120)
+    pattern = seahough.Pattern.from_image(img, mask=mask)
+    scene, _, truth = sim.marker_scene("board", seed=3)
+    found = seahough.Detector(pattern, (truth.scale, truth.scale),
+                              (truth.angle, truth.angle)).detect(scene)
+    assert found and calls == []
+    seahough.Detector(pattern).detect(scene)          # (any angle: the turns are tried)
+    assert calls
