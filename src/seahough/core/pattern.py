@@ -419,9 +419,14 @@ class Pattern:
         if key not in self._cache:
             from .symmetry import near_turns
             f = self.features(1.0, config)
-            # (the sampled points against all the pattern image's edges)
-            e = find_edge_points(compute_gradients(self._gray, 1.0, config.equalize),
-                                 config.min_gradient)
+            # (the sampled points against all the edges they were taken from)
+            e = find_edge_points(compute_gradients(np.asarray(self._prepared(config), np.float32),
+                                                   1.0, config.equalize), config.min_gradient)
+            if self._edge_mask is not None and len(e):
+                e = e.take(self._edge_mask[e.iy, e.ix])
+            # (each point against edges of its own sign: with either polarity a
+            # turned board's cells fall on cells of the other sign, and the
+            # turns would pass for exact)
             self._cache[key] = near_turns(f.vx, f.vy, f.vangle, e, e.index_map(), self.origin,
                                           tol=math.radians(config.angle_tolerance))
         return self._cache[key]
@@ -478,7 +483,10 @@ class Pattern:
         got = ids >= 0
         return (f32(edges.x[ids[got]] - ox), f32(edges.y[ids[got]] - oy), f32(edges.angle[ids[got]]))
 
-    def _compute_features(self, factor: float, config: Config) -> PatternFeatures:
+    def _prepared(self, config: Config) -> np.ndarray:
+        """The image whose edges are the pattern's features: grey or colour
+        (:meth:`_edges_from`), inverted for ``dark`` polarity, blurred for a
+        photo crop."""
         gray = self._edges_from(config)
         if self.polarity == "dark":
             gray = 255.0 - gray
@@ -487,6 +495,10 @@ class Pattern:
             # texture would not be there to match (Config.pattern_blur)
             gray = cv2.GaussianBlur(np.ascontiguousarray(gray, np.float32), (0, 0),
                                     config.pattern_blur, borderType=cv2.BORDER_REPLICATE)
+        return gray
+
+    def _compute_features(self, factor: float, config: Config) -> PatternFeatures:
+        gray = self._prepared(config)
         em = self._edge_mask
         mask_w = None
         if em is not None:
