@@ -210,8 +210,12 @@ def test_ctrl_c_during_detection_is_one_line_and_status_130(tmp_path):
     env = dict(os.environ, PYTHONUNBUFFERED="1", MPLBACKEND="Agg")
 
     def trial(delay):
+        # (Ctrl-C at its default in the command: a job started in the background by a
+        # non-interactive shell, as a CI runner may start this suite, ignores SIGINT,
+        # and a Python started with SIGINT ignored keeps ignoring it)
         p = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                             env=env)
+                             env=env, preexec_fn=lambda: signal.signal(signal.SIGINT,
+                                                                       signal.SIG_DFL))
         try:
             p.stdout.readline()            # one image done: the kernels are running
             time.sleep(delay)
