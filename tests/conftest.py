@@ -100,3 +100,18 @@ def write_frames(frames, folder: Path, prefix: str = "f_") -> list:
         cv2.imwrite(str(p), f)
         paths.append(str(p))
     return paths
+
+
+def run_bench_code(code: str, timeout: float = 300) -> str:
+    """Run ``code`` in a fresh interpreter with bench/ and src/ on the path
+    (bench code sets single-thread limits at import: not in the test
+    process); its stdout (a non-zero exit fails the test with its stderr)."""
+    import subprocess
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(root / "src"), str(root / "bench"),
+                                         env.get("PYTHONPATH", "")])
+    proc = subprocess.run([sys.executable, "-c", code], cwd=root, env=env, capture_output=True,
+                          text=True, timeout=timeout)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return proc.stdout

@@ -6,21 +6,15 @@ does: importing it makes the process single-threaded (bench/_common.py).
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
 from pathlib import Path
+
+from conftest import run_bench_code
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def _run(code: str) -> None:
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "bench"), str(ROOT / "src"),
-                                         env.get("PYTHONPATH", "")])
-    proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True,
-                          text=True, timeout=120)
-    assert proc.returncode == 0, proc.stderr[-3000:]
+    run_bench_code(code, timeout=120)
 
 
 HEAD = "import math, bench_robosub as B\nfrom bench_robosub import Box, Det\n"

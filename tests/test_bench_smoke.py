@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from conftest import run_bench_code
 from seahough._data import shared_data_dir
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -110,12 +111,7 @@ def test_auc_rank_formula():
             "assert run.auc([1, 1], [1, 1]) == 0.5\n"
             "assert abs(run.auc([0.9, 0.4, 0.8], [0.1, 0.5]) - 5 / 6) < 1e-12\n"
             "assert run.line_errors(179.5, 10.0, 0.5, -10.0) == (1.0, 0.0)\n")
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "bench"), str(ROOT / "src"),
-                                         env.get("PYTHONPATH", "")])
-    proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True,
-                          text=True, timeout=60)
-    assert proc.returncode == 0, proc.stderr[-2000:]
+    run_bench_code(code, timeout=60)
 
 
 def test_survey_chain_benchmark_runs():
@@ -276,24 +272,11 @@ def test_robosub_benchmark_quick(tmp_path):
 
 
 
-def _run_python(code: str) -> str:
-    """Run ``code`` in a fresh interpreter with bench/ on the path (bench code
-    sets single-thread limits at import: not in this test process); its
-    stdout."""
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), str(ROOT / "bench"),
-                                         env.get("PYTHONPATH", "")])
-    proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True,
-                          text=True, timeout=300)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    return proc.stdout
-
-
 def test_nfa_calibration_benchmark_quick():
     """bench_nfa --quick --fit completes: the fitted constants, the tables
     before and after by kind of search, the defaults' false alarms; every
     count is a rate per search."""
-    text = _run_python("import bench_nfa; bench_nfa.main(['--quick', '--fit'])")
+    text = run_bench_code("import bench_nfa; bench_nfa.main(['--quick', '--fit'])")
     assert re.search(r"Fitted on the tune part's whole-image marker searches: DEPENDENCE [\d.]+, "
                      r"LOG10_TESTS_SHARE -?[\d.]+", text)
     assert "The same with the calibrated model" in text
@@ -387,7 +370,7 @@ def test_nfa_fit_reads_the_evidence_and_keeps_the_promise():
     at the floor of 1e-300 and with no observation); and its fit, on made-up
     detections that keep the promise only at DEPENDENCE 8 and a share of -2 on
     the tune part, returns those, whatever the test part and the pool prefer."""
-    out = _run_python(FIT_CHECK)
+    out = run_bench_code(FIT_CHECK)
     gap = float(re.search(r"gap (\S+)", out).group(1))
     assert gap < 1e-9, out
     assert json.loads(re.search(r"fit (.+)", out).group(1)) == [8.0, -2.0], out
