@@ -6,11 +6,9 @@ does: importing it makes the process single-threaded (bench/_common.py).
 
 from __future__ import annotations
 
-from pathlib import Path
 
 from conftest import run_bench_code
 
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def _run(code: str) -> None:
