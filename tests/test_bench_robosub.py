@@ -6,9 +6,7 @@ does: importing it makes the process single-threaded (bench/_common.py).
 
 from __future__ import annotations
 
-
 from conftest import run_bench_code
-
 
 
 def _run(code: str) -> None:
