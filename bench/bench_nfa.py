@@ -30,14 +30,15 @@ poses, so that the model is seen where the number of tests varies.
 The constant in use, :data:`seahough.core.nfa.DEPENDENCE`, is the smallest
 at which the NFA holds as a bound on the tune part. With ``--fit`` the
 script also fits a *calibrated* model on the tune part's whole-image marker
-searches: :data:`~seahough.core.nfa.DEPENDENCE` and
-:data:`~seahough.core.nfa.LOG10_TESTS_SHARE` together, of a grid of both the
+searches: :data:`~seahough.core.nfa.DEPENDENCE` together with a *share* of the counted
+poses taken as independent tries (log10; the product takes every pose, a
+share of 0, never fewer than one try): of a grid of both, the
 pair that puts the most of the (group, e) within the band 0.5e-2e, ties
 broken by the squared log ratio of observed to promised (:func:`fit`); the
 page shows both models on every kind of search, and at the defaults. Each
 detection's NFA is recomputed at any pair from its stored evidence (the
 binomial tail at each DEPENDENCE of :data:`DEPENDENCES`, with the share
-set to 0, and the search's counted poses). The test part is reported as
+and the search's counted poses). The test part is reported as
 measured, by group, kind of search and pattern.
 
     python bench/bench_nfa.py --write         # ~10 min: collect, report, plot
@@ -183,7 +184,8 @@ def images(quick: bool):
 
 #: The DEPENDENCE values every detection's NFA is also computed at (for --fit).
 DEPENDENCES = (4.0, 8.0, 12.0, 14.0, 16.0, 18.0, 20.0, 24.0)
-#: The LOG10_TESTS_SHARE values of the fit's grid (applied to the stored rows).
+#: The shares of the fit's grid (log10 of the counted poses taken as tries;
+#: applied to the stored rows).
 SHARES = tuple(np.arange(-10.0, 0.01, 0.25).round(2))
 #: The calibrated model the fit of bench_nfa found (16, -7.5), not adopted
 #: (docs/nfa.md): shown beside the model in use when --fit is not given.
@@ -191,9 +193,8 @@ CALIBRATED = (16.0, -7.5)
 
 
 def collect(quick: bool) -> dict:
-    """Every detection's evidence on every object-free image: its NFA before
-    the share of independent tries (``LOG10_TESTS_SHARE = 0``) at each of
-    :data:`DEPENDENCES`, and the search's counted poses (log10)."""
+    """Every detection's evidence on every object-free image: its NFA at
+    each of :data:`DEPENDENCES`, and the search's counted poses (log10)."""
     pats = patterns()
     rows, searches = [], []
     judged = [0.0]
@@ -203,15 +204,14 @@ def collect(quick: bool) -> dict:
         t = time.perf_counter()
         judge(ctx, c)
         judged[0] += time.perf_counter() - t
-        used, by = (N.DEPENDENCE, N.LOG10_TESTS_SHARE), {}
+        used, by = N.DEPENDENCE, {}
         try:
-            N.LOG10_TESTS_SHARE = 0.0
             for d in DEPENDENCES:
                 N.DEPENDENCE = d
                 judge(ctx, c)
                 by[d] = c.evidence.log10_nfa
         finally:
-            N.DEPENDENCE, N.LOG10_TESTS_SHARE = used
+            N.DEPENDENCE = used
         judge(ctx, c)
         c.by_dependence = by
         c.log_tests = ranking.search_tests(ctx)
@@ -250,17 +250,17 @@ def collect(quick: bool) -> dict:
     return {"rows": rows, "searches": searches, "judge_s": judged[0], "search_s": t_search}
 
 
-def log_nfa(rows, dependence: float | None = None, share: float | None = None) -> np.ndarray:
-    """The rows' log10 NFA at ``dependence`` and ``share`` (default: the
-    constants in use)."""
+def log_nfa(rows, dependence: float | None = None, share: float = 0.0) -> np.ndarray:
+    """The rows' log10 NFA at ``dependence`` (default: the product's) with
+    ``10 ** share`` of the counted poses taken as independent tries, never
+    fewer than one (``share`` 0: every pose, as the product counts)."""
     d = N.DEPENDENCE if dependence is None else dependence
-    sh = N.LOG10_TESTS_SHARE if share is None else share
     raw = np.array([r["log10_nfa"][str(float(d))] for r in rows])
     tests = np.array([r["log_tests"] for r in rows])
-    return np.maximum(raw - tests + np.maximum(tests + sh, 0.0), N.MIN_LOG10_NFA)
+    return np.maximum(raw - tests + np.maximum(tests + share, 0.0), N.MIN_LOG10_NFA)
 
 
-def counts(data, select, dependence=None, share=None) -> tuple[int, dict]:
+def counts(data, select, dependence=None, share=0.0) -> tuple[int, dict]:
     """(searches, {e: detections per search with NFA <= e}) over the selected group."""
     n = sum(1 for s in data["searches"] if select(s[0], s[1], s[2]))
     rows = [r for r in data["rows"] if select(r["group"], r["split"], r["pattern"])]
@@ -273,7 +273,7 @@ def in_band(obs: float, e: float) -> bool:
 
 
 def fit(data, kinds=("marker, whole image",)) -> tuple[float, float]:
-    """(DEPENDENCE, LOG10_TESTS_SHARE) of the grid that puts the most of the
+    """(DEPENDENCE, share) of the grid that puts the most of the
     tune part's (group, e) of the searches of ``kinds`` within the band
     0.5e-2e, ties broken by the sum of squared log ratios of observed to
     promised (pool photos left out; they are in the test part anyway). By
@@ -333,7 +333,7 @@ def at_defaults(data, calibrated) -> str:
     ranks, filtered afterwards.)"""
     lines = ["| split | images | search | searches | min_score 0.5 alone (no NFA) | defaults "
              f"(max_nfa=1 and min_score 0.5) | defaults with the calibrated model "
-             f"(DEPENDENCE {calibrated[0]:g}, LOG10_TESTS_SHARE {calibrated[1]:g}) | "
+             f"(DEPENDENCE {calibrated[0]:g}, share of tries 10^{calibrated[1]:g}) | "
              "max_nfa=1 alone | max_nfa=1 alone, calibrated model |",
              "|---|---|---|---|---|---|---|---|---|"]
     for cell in cells(data):
@@ -353,8 +353,8 @@ def at_defaults(data, calibrated) -> str:
 
 def report(data, model=None) -> str:
     """Detections per search at each promised e, by group and kind of search
-    (``model``: (DEPENDENCE, LOG10_TESTS_SHARE); default: those in use)."""
-    model = model or (None, None)
+    (``model``: (DEPENDENCE, share); default: the product's)."""
+    model = model or (None, 0.0)
     lines = ["| split | images | search | searches | log10 poses counted | " + " | ".join(
         f"observed at e = {e:g} (band {0.5 * e:g}-{2 * e:g})" for e in PROMISED) + " |",
              "|---|---|---|---|---|" + "---|" * len(PROMISED)]
@@ -384,7 +384,7 @@ def plot(data, path: Path, calibrated) -> None:
         curves.append((f"{k} (test, natural images)",
                        lambda g, s, p, k=k: s == "test" and p == k and not g.startswith("pool"),
                        "^:"))
-    models = ((None, None), calibrated)
+    models = ((None, 0.0), calibrated)
     titles = (f"in use: DEPENDENCE {N.DEPENDENCE:g}, every pose a try (a bound)",
               f"calibrated, not adopted: DEPENDENCE {calibrated[0]:g}, "
               f"share 10^{calibrated[1]:g}")
@@ -414,7 +414,7 @@ def plot(data, path: Path, calibrated) -> None:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="a few images only (smoke test)")
-    ap.add_argument("--fit", action="store_true", help="fit DEPENDENCE and LOG10_TESTS_SHARE on the tune part (a calibrated model)")
+    ap.add_argument("--fit", action="store_true", help="fit DEPENDENCE and a share of tries on the tune part (a calibrated model)")
     ap.add_argument("--cache", type=Path, help="reuse (or write) the collected evidence here")
     ap.add_argument("--write", action="store_true", help="write docs/nfa_calibration.md and the plot")
     a = ap.parse_args(argv)
@@ -429,15 +429,15 @@ def main(argv=None) -> int:
     if a.fit:
         calibrated = fit(data)
         fitted = (f"Fitted on the tune part's whole-image marker searches: DEPENDENCE "
-                  f"{calibrated[0]:g}, LOG10_TESTS_SHARE {calibrated[1]:g}.  \n")
+                  f"{calibrated[0]:g}, share of tries 10^{calibrated[1]:g}.  \n")
         print(fitted)
     share = data["judge_s"] / max(data["search_s"], 1e-9)
     cmd = command() if a.cache is None else command().replace(str(a.cache), "EVIDENCE.json")
-    cal = f"DEPENDENCE {calibrated[0]:g}, LOG10_TESTS_SHARE {calibrated[1]:g}"
+    cal = f"DEPENDENCE {calibrated[0]:g}, share of tries 10^{calibrated[1]:g}"
     text = (f"Command: `{cmd}` (the evidence is collected afresh when the cache file "
             f"is absent)  \nDate: {time.strftime('%Y-%m-%d')}  \nMachine: {machine()}  \n"
-            f"{fitted}In use: DEPENDENCE = {N.DEPENDENCE:g}, LOG10_TESTS_SHARE = "
-            f"{N.LOG10_TESTS_SHARE:g}, CELL = {N.CELL} px. Split: see "
+            f"{fitted}In use: DEPENDENCE = {N.DEPENDENCE:g}, every counted pose a try, "
+            f"CELL = {N.CELL} px. Split: see "
             "the docstring of bench/bench_nfa.py and docs/nfa.md.\n\n"
             f"Detections per search with NFA <= e (min_score 0, no other filter), the model "
             f"in use:\n\n{report(data)}\n\n"

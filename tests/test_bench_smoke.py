@@ -278,7 +278,7 @@ def test_nfa_calibration_benchmark_quick():
     count is a rate per search."""
     text = run_bench_code("import bench_nfa; bench_nfa.main(['--quick', '--fit'])")
     assert re.search(r"Fitted on the tune part's whole-image marker searches: DEPENDENCE [\d.]+, "
-                     r"LOG10_TESTS_SHARE -?[\d.]+", text)
+                     r"share of tries 10\^-?[\d.]+", text)
     assert "The same with the calibrated model" in text
     assert "False alarms per search at the defaults" in text
     for k in ("marker, whole image", "rope (line 96 x 8)", "L in a window",
@@ -305,7 +305,8 @@ from seahough.core.preprocess import compute_gradients
 from seahough.core.refine import Pose
 from seahough import sim
 
-# 1. the stored evidence re-read at (d, sh) is what the product computes there
+# 1. the stored evidence re-read at any DEPENDENCE is what the product computes
+# there; a share of the counted poses as tries, never fewer than one
 g = sim.seabed((240, 320), seed=3)[:, :, 1].astype(np.float32)
 e = find_edge_points(compute_gradients(g), 30.0)
 idx = e.index_map()
@@ -320,23 +321,23 @@ for i in range(12):
     pose = Pose.from_params(rng.uniform(60, 260), rng.uniform(40, 200), rng.uniform(0.6, 1.4),
                             rng.uniform(0, 2 * math.pi))
     for tests in (0.5, 3.0, 9.0):
-        used = (N.DEPENDENCE, N.LOG10_TESTS_SHARE)
+        used = N.DEPENDENCE
         try:
-            N.LOG10_TESTS_SHARE = 0.0
             raw = {}
             for d in b.DEPENDENCES:
                 N.DEPENDENCE = d
                 raw[str(float(d))] = N.evidence(pose, vx, vy, vang, e, idx, bg, tests, tol=tol,
                                                 either=False).log10_nfa
-            row = {"log_tests": tests, "log10_nfa": raw}
-            for d in (4.0, 16.0):
-                for sh in (-7.5, -2.0, 0.0):
-                    N.DEPENDENCE, N.LOG10_TESTS_SHARE = d, sh
-                    want = N.evidence(pose, vx, vy, vang, e, idx, bg, tests, tol=tol,
-                                      either=False).log10_nfa
-                    gaps.append(abs(float(b.log_nfa([row], d, sh)[0]) - want))
         finally:
-            N.DEPENDENCE, N.LOG10_TESTS_SHARE = used
+            N.DEPENDENCE = used
+        row = {"log_tests": tests, "log10_nfa": raw}
+        for d in b.DEPENDENCES:
+            want = raw[str(float(d))]
+            gaps.append(abs(float(b.log_nfa([row], d)[0]) - want))
+            if want > N.MIN_LOG10_NFA + 20:
+                # 10 ** -2 of the poses: 2 decades fewer tries, floored at one
+                got = float(b.log_nfa([row], d, -2.0)[0])
+                gaps.append(abs(got - (want - tests + max(tests - 2.0, 0.0))))
 print("gap", max(gaps))
 
 # 2. the fit finds the constants that keep the promise on the tune part, and
@@ -365,9 +366,10 @@ print("band", all(b.in_band(obs[x], x) for x in b.PROMISED),
 
 
 def test_nfa_fit_reads_the_evidence_and_keeps_the_promise():
-    """bench_nfa re-reads each detection's stored evidence at any (DEPENDENCE,
-    LOG10_TESTS_SHARE) exactly as the product computes it (floored at one try,
-    at the floor of 1e-300 and with no observation); and its fit, on made-up
+    """bench_nfa re-reads each detection's stored evidence at any DEPENDENCE
+    exactly as the product computes it (at the floor of 1e-300 and with no
+    observation too), and takes a share of the poses as tries, never fewer
+    than one; and its fit, on made-up
     detections that keep the promise only at DEPENDENCE 8 and a share of -2 on
     the tune part, returns those, whatever the test part and the pool prefer."""
     out = run_bench_code(FIT_CHECK)

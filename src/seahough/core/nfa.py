@@ -15,8 +15,9 @@ by chance is::
 An answer with NFA <= 1 is one false alarm per image at most, on average
 (Desolneux, Moisan and Morel, *From Gestalt Theory to Image Analysis*,
 2008; Grompone von Gioi et al., LSD, IPOL 2012): a bound, which on
-object-free seabed photos holds several times loose (``docs/nfa.md``;
-:data:`LOG10_TESTS_SHARE` says why it is not made a count).
+object-free seabed photos holds several times loose (``docs/nfa.md`` says
+why it is not made a count: a calibrated model was measured and not
+adopted).
 
 ``p`` comes from the searched image itself (:class:`Background`): the
 share of the pixel positions near each place, per direction, that lie
@@ -52,14 +53,6 @@ STRIDE = 2
 #: spread several pixels apart) are each one. Measured on the tuning part of
 #: bench/bench_nfa.py (the smallest value at which the NFA holds as a bound).
 DEPENDENCE = 4.0
-#: log10 of the share of the counted poses (:func:`log10_tests`) taken as
-#: independent tries. 0: every counted pose is a try, and the NFA is the
-#: a-contrario bound. A fit of this and :data:`DEPENDENCE` makes the NFA a
-#: count on whole-image marker searches of object-free seabed (16 and -7.5:
-#: ``bench/bench_nfa.py --fit``), but not on line or windowed searches, and
-#: it raises the false alarms at the defaults several times: not adopted
-#: (``docs/nfa.md``).
-LOG10_TESTS_SHARE = 0.0
 #: Pattern points within this many working pixels of the image's border
 #: are not counted: the border holds the camera's own straight edges (dark
 #: lines that sensors and video decoders leave, a vignetted rim), which a
@@ -230,18 +223,6 @@ def log10_tests(region_area: float, radius: float, scale_range, angle_range,
     return math.log10(max(positions, 1.0)) + math.log10(n_angle) + math.log10(n_scale)
 
 
-def effective_tests(log_tests: float) -> float:
-    """log10 of the independent tries among ``10 ** log_tests`` counted
-    poses: the share :data:`LOG10_TESTS_SHARE` of them (0: all), at least one.
-
-    >>> effective_tests(9.0) == max(9.0 + LOG10_TESTS_SHARE, 0.0)
-    True
-    >>> effective_tests(0.0)
-    0.0
-    """
-    return max(float(log_tests) + LOG10_TESTS_SHARE, 0.0)
-
-
 @dataclass
 class Evidence:
     """The a-contrario counts of one pose."""
@@ -270,9 +251,7 @@ def evidence(pose, vx, vy, vang, edges, index, bg: Background, log_tests: float,
     closer than that share one; ``k`` the same count over the points that
     found a match: the edge points that agree, each once however many
     pattern points fall on it (at most ``n``). The binomial is taken over independent observations: one
-    per :data:`DEPENDENCE` edge points at most, ``k`` in proportion; ``log_tests``
-    (:func:`log10_tests`, the counted poses) is taken through
-    :func:`effective_tests`.
+    per :data:`DEPENDENCE` edge points at most, ``k`` in proportion.
     """
     ids, _ = K.match_points(vx, vy, vang, float(pose.a), float(pose.b), float(pose.tx),
                             float(pose.ty), edges.x, edges.y, edges.angle, index,
@@ -285,12 +264,11 @@ def evidence(pose, vx, vy, vang, edges, index, bg: Background, log_tests: float,
         float(BORDER), bool(either), float(step), float(DEPENDENCE))
     n = int(round(n_eff))
     if n == 0 or m_eff < 0.5:
-        return Evidence(n, 0, 0.0, effective_tests(log_tests))
+        return Evidence(n, 0, 0.0, log_tests)
     k_eff = min(float(k), n_eff)
     k = int(round(k_eff))
     # independent observations: one per DEPENDENCE edge points at most
     n_obs = int(round(m_eff))
     k_obs = min(int(round(k_eff * m_eff / n_eff)), n_obs)
     tail = log10_binom_tail(k_obs, n_obs, max(p, MIN_CHANCE))
-    return Evidence(n, k, p, max(effective_tests(log_tests) + tail, MIN_LOG10_NFA), n_obs,
-                    k_obs)
+    return Evidence(n, k, p, max(log_tests + tail, MIN_LOG10_NFA), n_obs, k_obs)

@@ -424,9 +424,6 @@ class Pattern:
                                                    1.0, config.equalize), config.min_gradient)
             if self._edge_mask is not None and len(e):
                 e = e.take(self._edge_mask[e.iy, e.ix])
-            # (each point against edges of its own sign: with either polarity a
-            # turned board's cells fall on cells of the other sign, and the
-            # turns would pass for exact)
             self._cache[key] = near_turns(f.vx, f.vy, f.vangle, e, e.index_map(), self.origin,
                                           tol=math.radians(config.angle_tolerance))
         return self._cache[key]

@@ -148,9 +148,9 @@ def line_parameters(x: float, y: float, angle_deg: float, shape) -> tuple[float,
 
 
 # ------------------------------------------------------------ full resolution
-def _full_pose(fit: Fit, features: Features) -> Pose:
-    tx, ty = features.gradients.to_full(fit.pose.tx, fit.pose.ty)
-    return Pose(fit.pose.a, fit.pose.b, float(tx), float(ty))
+def _full_pose(pose: Pose, features: Features) -> Pose:
+    tx, ty = features.gradients.to_full(pose.tx, pose.ty)
+    return Pose(pose.a, pose.b, float(tx), float(ty))
 
 
 def _full_radius(factor: float) -> float:
@@ -178,7 +178,7 @@ def _full_edges(ctx: SearchContext, gray, todo, turns=()):
     for c in todo:  # (and where its turns would put them: see _try_turns)
         poses = [c.fit.pose] + [turn_pose(c.fit.pose, t, cx * factor, cy * factor)
                                 for t, cx, cy in turns]
-        mapped = [_full_pose(Fit(q, 0.0, 0, 0.0, 0.0), ctx.features).map(vx, vy) for q in poses]
+        mapped = [_full_pose(q, ctx.features).map(vx, vy) for q in poses]
         pts.append((np.concatenate([m[0] for m in mapped]),
                     np.concatenate([m[1] for m in mapped])))
     band_r = int(math.ceil(_full_radius(factor) + cfg.search.band_slack))
@@ -211,7 +211,7 @@ def _full_edges(ctx: SearchContext, gray, todo, turns=()):
 def _full_res(ctx: SearchContext, fit: Fit, gray, where=None) -> Fit:
     """Refine a working-resolution fit on the full-resolution image."""
     cfg, p, factor = ctx.config, ctx.pattern, ctx.factor
-    pose = _full_pose(fit, ctx.features)
+    pose = _full_pose(fit.pose, ctx.features)
     vx, vy, vang = p.finish_points(factor, cfg)
     tol = math.radians(cfg.angle_tolerance)
     if factor < 0.999:

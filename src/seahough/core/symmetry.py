@@ -39,14 +39,15 @@ TURNS = (90.0, 180.0, 270.0)
 
 
 def near_turns(vx, vy, vang, edges, index, origin=(0.0, 0.0), *, tol: float,
-               radius: float = 1.5, either: bool = False) -> tuple:
+               radius: float = 1.5) -> tuple:
     """``((theta, cx, cy), ...)``: the turns of :data:`TURNS` (radians) about
     the centre (cx, cy) of the pattern's edges that put at least
     :data:`NEAR` and fewer than :data:`EXACT` of its points ``vx, vy, vang``
     (relative to ``origin``) within ``radius`` of one of its edge points
     (``edges``, :class:`~.keypoints.EdgePoints` of the pattern image, and
-    their ``index`` map) of the same direction (within ``tol`` radians; or
-    the opposite one, ``either``).
+    their ``index`` map) of the same direction (within ``tol`` radians; of
+    the same sign even for a pattern of either polarity: turned, a board's
+    cells fall on cells of the other sign).
     The points are a sample, the edges all of them: the sample need not be
     symmetric itself. ``(cx, cy)``: the middle of the edges' bounding box,
     relative to ``origin``.
@@ -77,7 +78,7 @@ def near_turns(vx, vy, vang, edges, index, origin=(0.0, 0.0), *, tol: float,
         theta = math.radians(deg)
         q = turn_pose(Pose(1.0, 0.0, ox, oy), theta, cx, cy)   # turned, in image pixels
         ids, _ = K.match_points(vx, vy, vang, q.a, q.b, q.tx, q.ty, edges.x, edges.y,
-                                edges.angle, index, float(radius), float(tol), bool(either))
+                                edges.angle, index, float(radius), float(tol), False)
         share = float(np.mean(ids >= 0))
         if NEAR <= share < EXACT:
             out.append((theta, cx, cy))
