@@ -188,3 +188,40 @@ def test_cli_colour_and_grey(tmp_path, capsys):
     assert rc == 0
     d = rec["detections"][0]
     assert math.hypot(d["x"] - 380.0, d["y"] - 220.0) < 2.0
+
+
+def _on_grey_texture(seed, chroma=30.0):
+    """320x240: strong grey texture (every channel alike, spread 40 levels)
+    and a flat 90 x 60 rectangle at (170, 120), turned by 30 degrees, as
+    grey as the texture's mean, red 30 up and green down: its border is a
+    colour step weaker than the texture's grey ones."""
+    rng = np.random.default_rng(seed)
+    t = cv2.GaussianBlur(rng.normal(0, 1, (240, 320)).astype(np.float32), (0, 0), 2.0)
+    t = 120 + 40 * t / t.std()
+    img = np.dstack([t, t, t])
+    box = cv2.boxPoints(((170.0, 120.0), (90.0, 60.0), -30.0))
+    inside = np.zeros((240, 320), np.uint8)
+    cv2.fillPoly(inside, [np.round(box).astype(np.int32)], 1)
+    img[inside > 0] = (120.0, 120.0 - chroma * 0.299 / 0.587, 120.0 + chroma)
+    return np.clip(img, 0, 255).astype(np.uint8)
+
+
+def test_weighing_the_colours_finds_a_colour_border_in_grey_texture():
+    def found(boost):
+        det = Detector(Pattern.rectangle(60, 40), (1.0, 2.0),
+                       config=Config(colour=True, colour_boost=boost))
+        n = 0
+        for seed in range(10):
+            d = det.detect(_on_grey_texture(seed))
+            n += bool(d) and math.hypot(d[0].x - 170, d[0].y - 120) < 2.0 \
+                and abs(d[0].scale - 1.5) < 0.05 and abs(d[0].angle % 180 - 30) < 1.5
+        return n
+    assert Config(colour=True).colour_boost == 4.0
+    weighed, plain = found(4.0), found(1.0)
+    assert weighed >= 8 and plain <= 4, (weighed, plain)
+
+
+@pytest.mark.parametrize("bad", [0.5, -1.0, float("nan"), 1000.0, "x"])
+def test_config_colour_boost_is_checked(bad):
+    with pytest.raises(ParameterError, match="colour_boost"):
+        Config(colour=True, colour_boost=bad)

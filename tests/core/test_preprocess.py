@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from seahough.config import Config
-from seahough.core.preprocess import choose_factor, compute_gradients, scale_image
+from seahough.core.preprocess import choose_factor, compute_gradients, scale_image, colour_metric
 
 
 def _direction(g, y, x):
@@ -186,3 +186,49 @@ def test_three_equal_channels_give_the_grey_gradients(factor, equalize):
     np.testing.assert_allclose(c.magnitude, g.magnitude, rtol=1e-5, atol=1e-3)
     np.testing.assert_allclose(c.gx, g.gx, rtol=1e-4, atol=1e-2)
     np.testing.assert_allclose(c.gy, g.gy, rtol=1e-4, atol=1e-2)
+
+
+# ------------------------------------------------- colour weighting (Config.colour_boost)
+def _textured_with_a_colour_step(seed=0):
+    """Grey texture (spread 20 levels, every channel alike) and, right of
+    x = 30, red 30 up and green 30 down: a step the texture does not make."""
+    rng = np.random.default_rng(seed)
+    t = rng.normal(0, 20, (60, 60)).astype(np.float32)
+    img = np.dstack([t, t, t]) + 100
+    img[:, 30:, 1] -= 30
+    img[:, 30:, 2] += 30
+    return img
+
+
+def test_colour_metric_keeps_the_texture_direction_and_amplifies_the_others():
+    img = _textured_with_a_colour_step()
+    gx = cv2.Scharr(img, cv2.CV_32F, 1, 0)
+    gy = cv2.Scharr(img, cv2.CV_32F, 0, 1)
+    w = colour_metric(gx, gy, 4.0)
+    grey = np.ones(3) / math.sqrt(3)
+    assert w.shape == (3, 3) and np.allclose(w, w.T, atol=1e-6)
+    assert float(grey @ w @ grey) == pytest.approx(1.0, abs=0.02)     # texture: its units
+    gains = np.linalg.eigvalsh(w.astype(np.float64))
+    assert gains.max() == pytest.approx(4.0, rel=1e-4)                  # capped
+    assert gains.min() == pytest.approx(1.0, abs=0.02)
+    assert colour_metric(gx, gy, 1.0) is None                           # 1: off
+    assert colour_metric(np.zeros_like(gx), np.zeros_like(gy), 4.0) is None   # flat image
+
+
+def test_weighed_colours_raise_a_colour_step_over_the_texture_and_keep_its_sign():
+    img = _textured_with_a_colour_step()
+    plain = compute_gradients(img)
+    weighed = compute_gradients(img, metric=4.0)
+    assert plain.metric is None and weighed.metric.shape == (3, 3)
+    step = (slice(5, 55), slice(29, 31))
+    texture = (slice(5, 55), slice(5, 25))
+    ratio = lambda g: float(np.median(g.magnitude[step]) / np.median(g.magnitude[texture]))
+    assert ratio(weighed) > 2.0 * ratio(plain)
+    # the sign is the channels' own: both point the same way along the step
+    assert np.all(np.sign(weighed.gx[step]) == np.sign(plain.gx[step]))
+    # a given metric is used as it is (the full-resolution strips take the working one's)
+    again = compute_gradients(img, metric=weighed.metric)
+    np.testing.assert_array_equal(again.magnitude, weighed.magnitude)
+    assert again.metric is weighed.metric
+    # grey images: no weighting
+    assert compute_gradients(img[:, :, 0], metric=4.0).metric is None

@@ -194,7 +194,8 @@ class Detector:
                 gray.shape, cfg, p.extent, s0)
         if features is None:
             features = extract_features(gray, factor, self._features_config(),
-                                        n_keypoints=self._n_keypoints(gray.shape, factor))
+                                        n_keypoints=self._n_keypoints(gray.shape, factor),
+                                        weigh_colours=True)
         t1 = time.perf_counter()
         timings["features"] = t1 - t0
         if len(features.segments) < 4:
@@ -299,7 +300,8 @@ class Detector:
             key = (f, d._n_keypoints(gray.shape, f), fcfg.chain_length)
             keys[name] = key
             if key not in shared:
-                shared[key] = extract_features(gray, key[0], fcfg, n_keypoints=key[1])
+                shared[key] = extract_features(gray, key[0], fcfg, n_keypoints=key[1],
+                                               weigh_colours=True)
         t1 = time.perf_counter()
         results = {name: d._search_pattern(gray, shared[keys[name]], time.perf_counter(), name,
                                               None if keys[name] is None else keys[name][0])

@@ -29,13 +29,18 @@ class Features:
 
 
 def extract_features(gray: np.ndarray, factor: float, config: Config,
-                     n_keypoints: int | None = None, mask: np.ndarray | None = None) -> Features:
-    """Run the preprocessing stages on a float32 grey image.
+                     n_keypoints: int | None = None, mask: np.ndarray | None = None,
+                     weigh_colours: bool = False) -> Features:
+    """Run the preprocessing stages on a float32 grey (or BGR) image.
 
     ``mask`` (working resolution, bool) limits the edge points, e.g. to a
-    pattern's own pixels.
+    pattern's own pixels. ``weigh_colours``: a colour image's channels are
+    weighed by its own gradient statistics (``Config.colour_boost``,
+    :func:`.preprocess.colour_metric`): for searched images, whose texture
+    hides an object's colour edges; a pattern's edges are all its own.
     """
-    grad = compute_gradients(gray, factor, config.equalize)
+    metric = config.colour_boost if weigh_colours else None
+    grad = compute_gradients(gray, factor, config.equalize, metric)
     edges = find_edge_points(grad, config.min_gradient)
     if mask is not None and len(edges):
         edges = edges.take(mask[edges.iy, edges.ix])

@@ -128,12 +128,14 @@ _STRIP_MARGIN = 3
 
 def edge_points_near_image(gray: np.ndarray, x, y, radius: float, min_gradient: float,
                            mask: np.ndarray | None = None, equalize: bool = False,
-                           rows: int = STRIP_ROWS) -> EdgePoints:
+                           rows: int = STRIP_ROWS, metric: np.ndarray | None = None) -> EdgePoints:
     """:func:`edge_points_near` on the full-resolution gradients of ``gray``
     (float32 grey or BGR), computed a strip of ``rows`` rows at a time: the
     same points, without holding a large image's gradients at once (a 12 MP
     frame's are 200 MB). With ``equalize`` (CLAHE, not local to a strip)
-    the whole image's gradients are taken.
+    the whole image's gradients are taken. ``metric``: a colour image's
+    channel weighting (:func:`.preprocess.colour_metric`), the same for every
+    strip.
 
     Examples
     --------
@@ -154,7 +156,7 @@ def edge_points_near_image(gray: np.ndarray, x, y, radius: float, min_gradient: 
     """
     h, w = gray.shape[:2]
     if equalize or h <= rows + 2 * _STRIP_MARGIN:
-        return edge_points_near(compute_gradients(gray, 1.0, equalize), x, y, radius,
+        return edge_points_near(compute_gradients(gray, 1.0, equalize, metric), x, y, radius,
                                 min_gradient, mask)
     x = np.asarray(x, float)
     y = np.asarray(y, float)
@@ -169,7 +171,7 @@ def edge_points_near_image(gray: np.ndarray, x, y, radius: float, min_gradient: 
         if not near.any():
             continue
         s0, s1 = max(0, y0 - margin), min(h, y1 + margin)
-        grad = compute_gradients(np.ascontiguousarray(gray[s0:s1]), 1.0, False)
+        grad = compute_gradients(np.ascontiguousarray(gray[s0:s1]), 1.0, False, metric)
         sub = None if mask is None else np.asarray(mask)[s0:s1]
         e = edge_points_near(grad, x[near], y[near] - s0, radius, min_gradient, sub, row0=s0)
         core = (e.iy >= y0 - s0) & (e.iy < y1 - s0)

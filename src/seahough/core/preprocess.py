@@ -24,6 +24,10 @@ class Gradients:
         Working pixels per full-resolution pixel, along x and y.
     full_shape : tuple
         (height, width) of the full-resolution image.
+    metric : ndarray or None
+        A colour image's channel weighting (3x3, :func:`colour_metric`)
+        that the gradients were measured with; None: the channels as they
+        are (and every grey image).
     """
 
     image: np.ndarray
@@ -33,6 +37,7 @@ class Gradients:
     fx: float
     fy: float
     full_shape: tuple[int, int]
+    metric: np.ndarray | None = None
 
     @property
     def factor(self) -> float:
@@ -82,7 +87,8 @@ def scale_image(gray: np.ndarray, factor: float) -> tuple[np.ndarray, float, flo
     return small, nw / w, nh / h
 
 
-def compute_gradients(gray: np.ndarray, factor: float = 1.0, equalize: bool = False) -> Gradients:
+def compute_gradients(gray: np.ndarray, factor: float = 1.0, equalize: bool = False,
+                      metric=None) -> Gradients:
     """Scale ``gray`` by ``factor`` and take its Scharr gradients.
 
     A colour image (HxWx3, BGR) gets the Di Zenzo colour gradient: per
@@ -113,6 +119,16 @@ def compute_gradients(gray: np.ndarray, factor: float = 1.0, equalize: bool = Fa
     equalize : bool
         Apply CLAHE before the gradients (uneven light, haze); each channel
         of a colour image.
+    metric : None, float or ndarray
+        How a colour image's channels are weighed (grey images: ignored).
+        None: as they are. A number ``b > 1``: by this image's own gradient
+        statistics, every colour direction's gain at most ``b``
+        (:func:`colour_metric`). A 3x3 array: that weighting (one measured
+        before, e.g. on the working image, for its full-resolution edges).
+        The magnitude and direction are those of the weighted channels; the
+        sign rule above stays that of the channels as they are, so that
+        "bright" and "dark" keep their meaning. ``Gradients.metric`` holds
+        the weighting used.
 
     Examples
     --------
@@ -141,7 +157,7 @@ def compute_gradients(gray: np.ndarray, factor: float = 1.0, equalize: bool = Fa
     """
     small, fx, fy = scale_image(gray, factor)
     if small.ndim == 3:
-        return _colour_gradients(small, fx, fy, gray.shape[:2], equalize)
+        return _colour_gradients(small, fx, fy, gray.shape[:2], equalize, metric)
     if equalize:
         clahe = cv2.createCLAHE(clipLimit=2.0, tileGridSize=(8, 8))
         small = clahe.apply(np.clip(small, 0, 255).astype(np.uint8)).astype(np.float32)
@@ -156,8 +172,50 @@ def compute_gradients(gray: np.ndarray, factor: float = 1.0, equalize: bool = Fa
     return Gradients(small, gx, gy, mag, fx, fy, gray.shape)
 
 
+def colour_metric(gxc: np.ndarray, gyc: np.ndarray, boost: float) -> np.ndarray | None:
+    """The channel weighting of a colour image measured in its own units.
+
+    ``gxc``, ``gyc``: the image's per-channel derivatives (HxWx3). Returns
+    the symmetric 3x3 matrix ``W = V diag(g) V^T``, where ``V, lam`` are the
+    eigenvectors and eigenvalues of the channels' gradient covariance (the
+    mean of ``d d^T`` over the pixels and both derivatives) and
+    ``g_i = sqrt(lam_max / max(lam_i, lam_max / boost^2))``: the direction in
+    colour space along which the image changes most (on a seabed, mostly
+    brightness: its texture) keeps its units, the others are amplified to
+    the same spread, by at most ``boost``. An edge that changes colour where
+    the texture does not (a painted marker whose grey level the water has
+    made the sand's) then weighs as much as the texture's strongest. None
+    when ``boost <= 1`` or the image has no gradient.
+
+    Examples
+    --------
+    Grey texture and one step from green to red: the texture's direction
+    (grey) keeps its gain of 1, the colour directions get the largest.
+
+    >>> rng = np.random.default_rng(0)
+    >>> t = rng.normal(0, 20, (60, 60)).astype(np.float32)
+    >>> img = np.dstack([t, t, t]) + 100
+    >>> img[:, 30:, 1] -= 30; img[:, 30:, 2] += 30
+    >>> gx = cv2.Scharr(img, cv2.CV_32F, 1, 0); gy = cv2.Scharr(img, cv2.CV_32F, 0, 1)
+    >>> W = colour_metric(gx, gy, 4.0)
+    >>> grey = np.ones(3) / np.sqrt(3)
+    >>> round(float(grey @ W @ grey), 2), round(float(np.linalg.eigvalsh(W).max()), 2)
+    (1.0, 4.0)
+    """
+    if boost <= 1.0:
+        return None
+    dx, dy = gxc.reshape(-1, 3), gyc.reshape(-1, 3)
+    cov = (dx.T @ dx + dy.T @ dy).astype(np.float64) / max(2 * dx.shape[0], 1)
+    lam, vec = np.linalg.eigh(cov)
+    top = float(lam.max())
+    if not top > 0.0:
+        return None
+    gain = np.sqrt(top / np.maximum(lam, top / (boost * boost)))
+    return ((vec * gain) @ vec.T).astype(np.float32)
+
+
 def _colour_gradients(small: np.ndarray, fx: float, fy: float, full_shape,
-                      equalize: bool) -> Gradients:
+                      equalize: bool, metric=None) -> Gradients:
     """:func:`compute_gradients` of a working BGR image (see there)."""
     if equalize:
         clahe = cv2.createCLAHE(clipLimit=2.0, tileGridSize=(8, 8))
@@ -166,8 +224,14 @@ def _colour_gradients(small: np.ndarray, fx: float, fy: float, full_shape,
     small = np.ascontiguousarray(small, dtype=np.float32)
     gxc = cv2.Scharr(small, cv2.CV_32F, 1, 0, borderType=cv2.BORDER_REPLICATE)
     gyc = cv2.Scharr(small, cv2.CV_32F, 0, 1, borderType=cv2.BORDER_REPLICATE)
-    bx, gx_, rx = gxc[:, :, 0], gxc[:, :, 1], gxc[:, :, 2]
-    by, gy_, ry = gyc[:, :, 0], gyc[:, :, 1], gyc[:, :, 2]
+    if metric is not None and np.ndim(metric) == 0:
+        metric = colour_metric(gxc, gyc, float(metric))
+    # the sign (below) is taken from the channels as they are; the tensor
+    # from the weighted ones
+    wxc, wyc = ((gxc, gyc) if metric is None else
+                (cv2.transform(gxc, metric), cv2.transform(gyc, metric)))
+    bx, gx_, rx = wxc[:, :, 0], wxc[:, :, 1], wxc[:, :, 2]
+    by, gy_, ry = wyc[:, :, 0], wyc[:, :, 1], wyc[:, :, 2]
     # (float32 numpy, in place where it can be: a third of the time of a plain
     # version with arctan2; still about 2 ms at 320x240, against 0.1 for grey)
     third = np.float32(1.0 / 3.0)
@@ -194,7 +258,8 @@ def _colour_gradients(small: np.ndarray, fx: float, fy: float, full_shape,
     uy /= norm
     # polarity: the sign of sum_c d_c |d_c|, d_c channel c's derivative along it
     total = np.zeros_like(mag)
-    for cx, cy in ((bx, by), (gx_, gy_), (rx, ry)):
+    for i in range(3):
+        cx, cy = gxc[:, :, i], gyc[:, :, i]
         d = cx * ux
         d += cy * uy
         d *= np.abs(d)
@@ -203,4 +268,4 @@ def _colour_gradients(small: np.ndarray, fx: float, fy: float, full_shape,
     gx = np.ascontiguousarray(mag_s * ux, dtype=np.float32)
     gy = np.ascontiguousarray(mag_s * uy, dtype=np.float32)
     grey = cv2.cvtColor(small, cv2.COLOR_BGR2GRAY)
-    return Gradients(grey, gx, gy, mag, fx, fy, tuple(full_shape))
+    return Gradients(grey, gx, gy, mag, fx, fy, tuple(full_shape), metric)

@@ -202,7 +202,8 @@ def _full_edges(ctx: SearchContext, gray, todo, turns=()):
         e = edge_points_near_image(gray[y0:y1, x0:x1],
                                    np.concatenate([pts[i][0] for i in members]) - x0,
                                    np.concatenate([pts[i][1] for i in members]) - y0, band_r,
-                                   cfg.min_gradient, None, cfg.equalize)
+                                   cfg.min_gradient, None, cfg.equalize,
+                                   metric=ctx.features.gradients.metric)
         for i in members:
             out[i] = (box, e, e.index_map())
     return out
