@@ -178,7 +178,7 @@ class Config:
         much as the texture's strongest edges. 1 turns it off (plain Di
         Zenzo). 4, chosen on the tune part of ``bench/bench_colour.py``
         (docs/colour.md): 82 -> 91 % of coloured markers found there, false
-        alarms 0.014 -> 0.002 per search (2: 89 %, 8: 90 %). Patterns'
+        alarms 0.014 -> 0.002 per search (3: 89 %, 6: 90 %). Patterns'
         edges are measured as they are.
     pattern_blur : float
         Gaussian sigma (pattern-image pixels) applied to an image pattern

@@ -143,12 +143,43 @@ def check_ranges(scale_range, angle_range):
     return s, (a0, a0 + span)
 
 
-def make_bins(pf: PatternFeatures, scale_range, angle_range, region, config: Config) -> Bins:
+def edge_gap(pf: PatternFeatures, n: int = 64) -> float:
+    """Median distance, across its edge, from a pattern point to the nearest
+    parallel edge of the pattern (working px at scale 1; inf when most
+    points have none): the width of a marker board's rings, of a bar, of a
+    shape (its opposite side).
+
+    Examples
+    --------
+    >>> from seahough.core.pattern import Pattern
+    >>> round(edge_gap(Pattern.rectangle(60, 40).features(1.0)))   # its height, mostly
+    40
+    """
+    x, y, a = (np.asarray(v, np.float64) for v in (pf.vx, pf.vy, pf.vangle))
+    if x.size < 4:
+        return math.inf
+    q = np.unique(np.linspace(0, x.size - 1, min(n, x.size)).astype(int))
+    nx, ny = np.cos(a[q])[:, None], np.sin(a[q])[:, None]
+    dx, dy = x[None, :] - x[q][:, None], y[None, :] - y[q][:, None]
+    across = np.abs(dx * nx + dy * ny)                # along the query's normal
+    beside = np.abs(dx * ny - dy * nx)                # along its edge
+    parallel = np.abs(np.sin(a[None, :] - a[q][:, None])) < math.sin(math.radians(20.0))
+    other = parallel & (across > 1.5) & (beside <= max(2.0, 2.0 * pf.spacing))
+    gap = np.where(other, across, np.inf).min(axis=1)
+    return float(np.median(gap))
+
+
+def make_bins(pf: PatternFeatures, scale_range, angle_range, region, config: Config,
+              nested: bool = False) -> Bins:
     """Bin sizes from the pattern's size, the ranges and the config.
 
     ``region`` is (x0, y0, x1, y1) in working pixels: where the pattern
     origin may lie. A ParameterError refuses an accumulator over the limits
     (:data:`MAX_SLICE_CELLS`, :data:`MAX_CELLS`), naming what to change.
+    ``nested``: the pattern is drawn with borders (a shape, a marker; not a
+    texture, not a line): its translation bin is at most half its
+    :func:`edge_gap` at the middle scale (at least 2 px), so that a marker
+    board's pose and the pose one ring off fall in different cells.
     """
     (s0, s1), (a0, a1) = check_ranges(scale_range, angle_range)
     r = max(pf.radius, 2.0)
@@ -161,6 +192,8 @@ def make_bins(pf: PatternFeatures, scale_range, angle_range, region, config: Con
         step = 1.0
     else:
         step = float(np.clip(0.17 * r * s_mid, 2.0, 6.0))
+        if nested:
+            step = max(2.0, min(step, 0.5 * edge_gap(pf) * s_mid))
     # rotation and scale steps that move the pattern's points about one bin
     kappa = 1.6 * step / (r * s_mid)
     if angle_known:

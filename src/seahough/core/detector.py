@@ -208,7 +208,8 @@ class Detector:
         if region is None:
             return SearchResult([], None, features, factor, [], timings,
                                 note="search_region is outside the image")
-        bins = make_bins(pf, (s0, s1), angles, region, cfg)
+        bins = make_bins(pf, (s0, s1), angles, region, cfg,
+                         nested=not p.is_line and p.has_long_borders(cfg))
         votes = accumulate(pf, features.segments, bins, p.either)
         t2 = time.perf_counter()
         timings["voting"] = t2 - t1
