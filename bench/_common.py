@@ -32,7 +32,30 @@ def machine() -> str:
         pass
     return (f"{cpu}, {os.cpu_count()} cores (benchmarks run single-threaded), "
             f"Python {platform.python_version()}, numpy {numpy.__version__}, "
-            f"numba {numba.__version__}, OpenCV {cv2.__version__}")
+            f"numba {numba.__version__}, OpenCV {cv2.__version__}; "
+            f"speed reference: {reference_ms():.2f} ms (see reference_ms: compare pages' "
+            "times by it, machines of one name differ)")
+
+
+def reference_ms(repeat: int = 200) -> float:
+    """Median ms of a fixed piece of work on this machine, now: the grey
+    Scharr gradients and edge thinning of a 640x480 image (what every search
+    does first). The shared machines of one name have run 1-4 times slower
+    from day to day: a page's times are comparable with another's in this unit."""
+    import time
+
+    import numpy
+    from seahough.core.keypoints import find_edge_points
+    from seahough.core.preprocess import compute_gradients
+    img = cv2.GaussianBlur(numpy.random.default_rng(0).uniform(0, 255, (480, 640))
+                           .astype(numpy.float32), (0, 0), 2.0)
+    find_edge_points(compute_gradients(img), 48.0)     # (compiles)
+    times = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        find_edge_points(compute_gradients(img), 48.0)
+        times.append(1000.0 * (time.perf_counter() - t))
+    return float(numpy.median(times))
 
 
 def command() -> str:
