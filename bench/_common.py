@@ -33,29 +33,29 @@ def machine() -> str:
     return (f"{cpu}, {os.cpu_count()} cores (benchmarks run single-threaded), "
             f"Python {platform.python_version()}, numpy {numpy.__version__}, "
             f"numba {numba.__version__}, OpenCV {cv2.__version__}; "
-            f"speed reference: {reference_ms():.2f} ms (see reference_ms: compare pages' "
-            "times by it, machines of one name differ)")
+            f"speed reference: {reference_ms():.2f} ms (bench/_common.py reference_ms: compare "
+            "pages' times by it, machines of one name differ)")
 
 
-def reference_ms(repeat: int = 200) -> float:
-    """Median ms of a fixed piece of work on this machine, now: the grey
-    Scharr gradients and edge thinning of a 640x480 image (what every search
-    does first). The shared machines of one name have run 1-4 times slower
-    from day to day: a page's times are comparable with another's in this unit."""
+def reference_ms(repeat: int = 50) -> float:
+    """Median ms of a fixed piece of work on this machine, now: OpenCV's
+    Gaussian blur, Scharr derivatives and their magnitude on a 640x480 float
+    image (OpenCV and numpy only, so that it does not move with seahough).
+    Shared machines of one name have run 1-4 times slower from day to day:
+    in this unit, a page's times compare with another's."""
     import time
 
     import numpy
-    from seahough.core.keypoints import find_edge_points
-    from seahough.core.preprocess import compute_gradients
-    img = cv2.GaussianBlur(numpy.random.default_rng(0).uniform(0, 255, (480, 640))
-                           .astype(numpy.float32), (0, 0), 2.0)
-    find_edge_points(compute_gradients(img), 48.0)     # (compiles)
+    img = numpy.random.default_rng(0).uniform(0, 255, (480, 640)).astype(numpy.float32)
     times = []
-    for _ in range(repeat):
+    for _ in range(repeat + 1):
         t = time.perf_counter()
-        find_edge_points(compute_gradients(img), 48.0)
+        g = cv2.GaussianBlur(img, (0, 0), 2.0)
+        gx = cv2.Scharr(g, cv2.CV_32F, 1, 0)
+        gy = cv2.Scharr(g, cv2.CV_32F, 0, 1)
+        numpy.sqrt(gx * gx + gy * gy)
         times.append(1000.0 * (time.perf_counter() - t))
-    return float(numpy.median(times))
+    return float(numpy.median(times[1:]))
 
 
 def command() -> str:

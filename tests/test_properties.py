@@ -233,6 +233,8 @@ def configs(draw):
     kw["match_radius"] = draw(st.floats(0.5, 5.0, **finite))
     kw["n_candidates"] = draw(st.integers(1, 10))
     kw["refine"] = draw(st.booleans())
+    kw["colour"] = draw(st.booleans())
+    kw["colour_boost"] = draw(st.floats(1.0, 8.0, **finite))
     return Config(**kw)
 
 

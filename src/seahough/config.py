@@ -177,7 +177,7 @@ class Config:
         marker that the water has made as grey as the sand) then counts as
         much as the texture's strongest edges. 1 turns it off (plain Di
         Zenzo). 4, chosen on the tune part of ``bench/bench_colour.py``
-        (docs/colour.md): 82 -> 91 % of coloured markers found there, false
+        (docs/colour.md): 82 -> 90 % of coloured markers found there, false
         alarms 0.014 -> 0.002 per search (3: 89 %, 6: 90 %). Patterns'
         edges are measured as they are.
     pattern_blur : float

@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 
 from seahough.config import Config
-from seahough.core.accumulator import accumulate, check_ranges, make_bins, planes
-from seahough.core.pattern import PatternFeatures
+from seahough.core.accumulator import accumulate, check_ranges, edge_gap, make_bins, planes
+from seahough.core.pattern import Pattern, PatternFeatures
 from seahough.core.preprocess import compute_gradients
 from seahough.core.segments import Segments
 from seahough.errors import ParameterError
@@ -308,31 +308,64 @@ def _nested_squares(sides=(120, 92, 64), size=140):
 
 
 def test_edge_gap_is_the_width_of_a_ring_or_of_a_shape():
-    from seahough.core.accumulator import edge_gap
-    from seahough.core.pattern import Pattern
-    rings = Pattern.from_image(_nested_squares())
-    assert edge_gap(rings.features(1.0)) == pytest.approx(14.0, abs=1.5)
-    assert edge_gap(rings.features(0.5)) == pytest.approx(7.0, abs=1.0)
-    assert edge_gap(Pattern.rectangle(120, 40).features(1.0)) == pytest.approx(40.0, abs=2.0)
+    rings = Pattern.from_image(_nested_squares(), polarity="either")
+    assert edge_gap(rings.features(1.0), either=True) == pytest.approx(14.0, abs=1.5)
+    assert edge_gap(rings.features(0.5), either=True) == pytest.approx(7.0, abs=1.0)
+    # the same direction of gradient only (a "bright" pattern): no ring is its
+    # neighbour's look-alike; the nearest are two rings on, or across the squares
+    bright = Pattern.from_image(_nested_squares(), polarity="bright")
+    assert edge_gap(bright.features(1.0)) >= 27.0
+    bar = Pattern.rectangle(120, 40, polarity="either").features(1.0)
+    assert edge_gap(bar, either=True) == pytest.approx(40.0, abs=2.0)
+    assert edge_gap(Pattern.rectangle(120, 40).features(1.0)) == math.inf
 
 
-def test_nested_outlines_get_translation_bins_of_half_a_ring():
-    from seahough.core.accumulator import edge_gap
-    from seahough.core.pattern import Pattern
+@pytest.mark.parametrize("scale_range", [(0.5, 2.0), (1.0, 4.0)])
+def test_nested_outlines_get_translation_bins_of_half_a_ring(scale_range):
     cfg = Config()
-    pf = Pattern.from_image(_nested_squares()).features(0.5, cfg)
+    pf = Pattern.from_image(_nested_squares(), polarity="either").features(0.5, cfg)
+    gap = edge_gap(pf, either=True)
+    s_mid = math.sqrt(scale_range[0] * scale_range[1])
     region = (0.0, 0.0, 319.0, 239.0)
-    plain = make_bins(pf, (0.5, 2.0), (0.0, 360.0), region, cfg)
-    nested = make_bins(pf, (0.5, 2.0), (0.0, 360.0), region, cfg, nested=True)
-    assert plain.step > 0.5 * edge_gap(pf) + 0.5      # the derived bin spans most of a ring
-    assert nested.step == pytest.approx(max(2.0, 0.5 * edge_gap(pf)))
+    plain = make_bins(pf, scale_range, (0.0, 360.0), region, cfg)
+    nested = make_bins(pf, scale_range, (0.0, 360.0), region, cfg, gap)
+    assert nested.step == pytest.approx(max(2.0, 0.5 * plain.step,
+                                            min(plain.step, 0.5 * gap * s_mid)))
+    if s_mid == 1.0:   # the derived bin (4.6 px) spans most of a ring (7 px): halved
+        assert nested.step < plain.step
+    else:              # rings of 14 px at the middle scale: the derived bin (6 px) holds
+        assert nested.step == plain.step
+    # only the translation bin: rotation and scale bins stay the derived ones
+    np.testing.assert_array_equal(nested.angles, plain.angles)
+    np.testing.assert_array_equal(nested.scales, plain.scales)
     # a plain shape's opposite side is far: its bins stay as derived
-    rect = Pattern.rectangle(120, 80).features(0.5, cfg)
-    assert make_bins(rect, (0.5, 2.0), (0.0, 360.0), region, cfg, nested=True).step == \
-        make_bins(rect, (0.5, 2.0), (0.0, 360.0), region, cfg).step
+    rect = Pattern.rectangle(120, 80, polarity="either").features(0.5, cfg)
+    assert make_bins(rect, scale_range, (0.0, 360.0), region, cfg,
+                     edge_gap(rect, either=True)).step == \
+        make_bins(rect, scale_range, (0.0, 360.0), region, cfg).step
+    # a thin stroke: at most half the derived bin finer (its cells would multiply)
+    assert make_bins(pf, scale_range, (0.0, 360.0), region, cfg, 1.0).step == \
+        pytest.approx(max(2.0, 0.5 * plain.step))
     # a bin given by the caller is kept
     fixed = cfg.replace(translation_bin=5.0)
-    assert make_bins(pf, (0.5, 2.0), (0.0, 360.0), region, fixed, nested=True).step == 5.0
+    assert make_bins(pf, scale_range, (0.0, 360.0), region, fixed, gap).step == 5.0
+
+
+def test_the_detector_takes_the_gap_of_drawn_patterns_only():
+    from seahough import Detector
+    rings = Pattern.from_image(_nested_squares(), polarity="either")
+    assert Detector(rings)._edge_gap(rings.features(0.5)) == pytest.approx(7.0, abs=1.0)
+    # ... also when its search ranks key points by contrast alone
+    d0 = Detector(rings, config=Config(chain_length=0.0))
+    assert d0._edge_gap(rings.features(0.5)) == pytest.approx(7.0, abs=1.0)
+    line = Pattern.line(96, 8)
+    assert Detector(line)._edge_gap(line.features(0.5)) is None
+    rng = np.random.default_rng(3)
+    import cv2
+    texture = cv2.GaussianBlur(rng.uniform(0, 255, (120, 120)).astype(np.float32), (0, 0), 1.5)
+    patch = Pattern.from_image(np.clip(texture, 0, 255).astype(np.uint8))
+    for cfg in (Config(), Config(chain_length=0.0)):
+        assert Detector(patch, config=cfg)._edge_gap(patch.features(0.5, cfg)) is None
 
 
 def test_a_marker_board_is_not_taken_one_ring_off():

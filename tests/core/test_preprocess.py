@@ -224,11 +224,33 @@ def test_weighed_colours_raise_a_colour_step_over_the_texture_and_keep_its_sign(
     texture = (slice(5, 55), slice(5, 25))
     ratio = lambda g: float(np.median(g.magnitude[step]) / np.median(g.magnitude[texture]))
     assert ratio(weighed) > 2.0 * ratio(plain)
-    # the sign is the channels' own: both point the same way along the step
-    assert np.all(np.sign(weighed.gx[step]) == np.sign(plain.gx[step]))
     # a given metric is used as it is (the full-resolution strips take the working one's)
     again = compute_gradients(img, metric=weighed.metric)
     np.testing.assert_array_equal(again.magnitude, weighed.magnitude)
-    assert again.metric is weighed.metric
+    np.testing.assert_array_equal(again.metric, weighed.metric)
+    # BGRA: the alpha channel is not a colour
+    bgra = np.dstack([img, np.full(img.shape[:2], 255, np.float32)])
+    np.testing.assert_array_equal(compute_gradients(bgra, metric=4.0).magnitude,
+                                  weighed.magnitude)
     # grey images: no weighting
     assert compute_gradients(img[:, :, 0], metric=4.0).metric is None
+
+
+def test_weighed_colours_keep_the_sign_of_the_channels_as_they_are():
+    # blue 14 down, green and red 12 up across x = 30, on grey texture: as
+    # they are, the channels that rise win (sum d |d| > 0: the gradient points
+    # +x); weighed, the colour part of the step (blue against the others) is
+    # amplified and blue would win. The sign stays that of the channels.
+    rng = np.random.default_rng(1)
+    t = rng.normal(0, 20, (60, 60)).astype(np.float32)
+    t[:, 24:36] = 0.0                       # (flat about the step)
+    img = np.dstack([t, t, t]) + 100
+    img[:, 30:] += np.array([-14.0, 12.0, 12.0], np.float32)
+    step = (slice(5, 55), slice(29, 31))
+    for metric in (None, 4.0):
+        g = compute_gradients(img, metric=metric)
+        assert np.mean(g.gx[step] > 0) > 0.95, metric
+    # (what a sign taken from the weighed channels would say: blue falls most)
+    w = compute_gradients(img, metric=4.0).metric
+    d = w @ np.array([-14.0, 12.0, 12.0])
+    assert float(np.sum(d * np.abs(d))) < 0

@@ -143,17 +143,22 @@ def check_ranges(scale_range, angle_range):
     return s, (a0, a0 + span)
 
 
-def edge_gap(pf: PatternFeatures, n: int = 64) -> float:
+def edge_gap(pf: PatternFeatures, either: bool = False, n: int = 64) -> float:
     """Median distance, across its edge, from a pattern point to the nearest
-    parallel edge of the pattern (working px at scale 1; inf when most
-    points have none): the width of a marker board's rings, of a bar, of a
-    shape (its opposite side).
+    parallel edge of the pattern that it could be taken for (working px at
+    scale 1; inf when most points have none): the same direction of
+    gradient, or either direction when the pattern's polarity is
+    ``"either"``. The width of a marker board's rings (``either``) or of
+    two of them, a shape's opposite side (``either``) or nothing.
 
     Examples
     --------
     >>> from seahough.core.pattern import Pattern
-    >>> round(edge_gap(Pattern.rectangle(60, 40).features(1.0)))   # its height, mostly
-    40
+    >>> bar = Pattern.rectangle(60, 40, polarity="either").features(1.0)
+    >>> round(edge_gap(bar, either=True))   # its height, mostly (edges 0.7 px out)
+    41
+    >>> edge_gap(Pattern.rectangle(60, 40).features(1.0))   # no side is another's look-alike
+    inf
     """
     x, y, a = (np.asarray(v, np.float64) for v in (pf.vx, pf.vy, pf.vangle))
     if x.size < 4:
@@ -163,23 +168,27 @@ def edge_gap(pf: PatternFeatures, n: int = 64) -> float:
     dx, dy = x[None, :] - x[q][:, None], y[None, :] - y[q][:, None]
     across = np.abs(dx * nx + dy * ny)                # along the query's normal
     beside = np.abs(dx * ny - dy * nx)                # along its edge
-    parallel = np.abs(np.sin(a[None, :] - a[q][:, None])) < math.sin(math.radians(20.0))
+    da = a[None, :] - a[q][:, None]
+    cos20 = math.cos(math.radians(20.0))
+    parallel = (np.abs(np.cos(da)) > cos20) if either else (np.cos(da) > cos20)
     other = parallel & (across > 1.5) & (beside <= max(2.0, 2.0 * pf.spacing))
     gap = np.where(other, across, np.inf).min(axis=1)
     return float(np.median(gap))
 
 
 def make_bins(pf: PatternFeatures, scale_range, angle_range, region, config: Config,
-              nested: bool = False) -> Bins:
+              gap: float | None = None) -> Bins:
     """Bin sizes from the pattern's size, the ranges and the config.
 
     ``region`` is (x0, y0, x1, y1) in working pixels: where the pattern
     origin may lie. A ParameterError refuses an accumulator over the limits
     (:data:`MAX_SLICE_CELLS`, :data:`MAX_CELLS`), naming what to change.
-    ``nested``: the pattern is drawn with borders (a shape, a marker; not a
-    texture, not a line): its translation bin is at most half its
-    :func:`edge_gap` at the middle scale (at least 2 px), so that a marker
-    board's pose and the pose one ring off fall in different cells.
+    ``gap``: the :func:`edge_gap` of a pattern drawn with borders (a shape,
+    a marker; not a texture, not a line): its translation bin is at most
+    half of it at the middle scale, so that a marker board's pose and the
+    pose one ring off fall in different cells; at least 2 px and half the
+    derived bin (a thin stroke's cells would otherwise multiply), and the
+    rotation and scale bins stay those of the derived one.
     """
     (s0, s1), (a0, a1) = check_ranges(scale_range, angle_range)
     r = max(pf.radius, 2.0)
@@ -192,10 +201,10 @@ def make_bins(pf: PatternFeatures, scale_range, angle_range, region, config: Con
         step = 1.0
     else:
         step = float(np.clip(0.17 * r * s_mid, 2.0, 6.0))
-        if nested:
-            step = max(2.0, min(step, 0.5 * edge_gap(pf) * s_mid))
     # rotation and scale steps that move the pattern's points about one bin
     kappa = 1.6 * step / (r * s_mid)
+    if gap is not None and not config.translation_bin and not (scale_known and angle_known):
+        step = max(2.0, 0.5 * step, min(step, 0.5 * gap * s_mid))
     if angle_known:
         angles = np.array([math.radians(a0)])
         half = math.radians(config.angle_tolerance)

@@ -18,7 +18,8 @@ from ..config import Config
 from .._validate import check_max_nfa, number
 from ..errors import ParameterError
 from ..io.images import to_image
-from .accumulator import AccumulatorPlanes, accumulate, check_ranges, make_bins, planes
+from .accumulator import (AccumulatorPlanes, accumulate, check_ranges, edge_gap, make_bins,
+                          planes)
 from .candidates import PoseComparison, SearchContext, find_candidates
 from .features import Features, extract_features
 from .pattern import Pattern
@@ -208,8 +209,7 @@ class Detector:
         if region is None:
             return SearchResult([], None, features, factor, [], timings,
                                 note="search_region is outside the image")
-        bins = make_bins(pf, (s0, s1), angles, region, cfg,
-                         nested=not p.is_line and p.has_long_borders(cfg))
+        bins = make_bins(pf, (s0, s1), angles, region, cfg, self._edge_gap(pf))
         votes = accumulate(pf, features.segments, bins, p.either)
         t2 = time.perf_counter()
         timings["voting"] = t2 - t1
@@ -228,6 +228,18 @@ class Detector:
         timings["total"] = time.perf_counter() - t0
         return SearchResult(dets, planes(votes, bins, features.gradients), features, factor,
                             cands, timings)
+
+    def _edge_gap(self, pf) -> float | None:
+        """The pattern's :func:`.accumulator.edge_gap` when it is drawn with
+        borders (a shape, a marker: judged at the default chain length, also
+        when the search's is 0), else None (a texture, a line)."""
+        p, cfg = self.pattern, self.config
+        if p.is_line:
+            return None
+        if not p.has_long_borders(cfg if cfg.chain_length > 0
+                                  else cfg.replace(chain_length=Config().chain_length)):
+            return None
+        return edge_gap(pf, p.either)
 
     def _features_config(self) -> Config:
         """The Config of the image's features: key points weighted by their
