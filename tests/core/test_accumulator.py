@@ -354,18 +354,18 @@ def test_nested_outlines_get_translation_bins_of_half_a_ring(scale_range):
 def test_the_detector_takes_the_gap_of_drawn_patterns_only():
     from seahough import Detector
     rings = Pattern.from_image(_nested_squares(), polarity="either")
-    assert Detector(rings)._edge_gap(rings.features(0.5)) == pytest.approx(7.0, abs=1.0)
+    assert Detector(rings)._edge_gap(rings.features(0.5), 0.5) == pytest.approx(7.0, abs=1.0)
     # ... also when its search ranks key points by contrast alone
     d0 = Detector(rings, config=Config(chain_length=0.0))
-    assert d0._edge_gap(rings.features(0.5)) == pytest.approx(7.0, abs=1.0)
+    assert d0._edge_gap(rings.features(0.5), 0.5) == pytest.approx(7.0, abs=1.0)
     line = Pattern.line(96, 8)
-    assert Detector(line)._edge_gap(line.features(0.5)) is None
+    assert Detector(line)._edge_gap(line.features(0.5), 0.5) is None
     rng = np.random.default_rng(3)
     import cv2
     texture = cv2.GaussianBlur(rng.uniform(0, 255, (120, 120)).astype(np.float32), (0, 0), 1.5)
     patch = Pattern.from_image(np.clip(texture, 0, 255).astype(np.uint8))
     for cfg in (Config(), Config(chain_length=0.0)):
-        assert Detector(patch, config=cfg)._edge_gap(patch.features(0.5, cfg)) is None
+        assert Detector(patch, config=cfg)._edge_gap(patch.features(0.5, cfg), 0.5) is None
 
 
 def test_a_marker_board_is_not_taken_one_ring_off():

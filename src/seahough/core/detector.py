@@ -148,6 +148,7 @@ class Detector:
                                      "with x1 > x0 and y1 > y0")
             search_region = sr
         self.search_region = search_region
+        self._gaps: dict = {}   # working scale -> the pattern's edge gap (see _edge_gap)
         if self.parts:   # one Config for all: they share the image's features
             ref = self.config if config is not None else next(iter(self.parts.values())).config
             if any(d.config != ref for d in self.parts.values()):
@@ -209,7 +210,7 @@ class Detector:
         if region is None:
             return SearchResult([], None, features, factor, [], timings,
                                 note="search_region is outside the image")
-        bins = make_bins(pf, (s0, s1), angles, region, cfg, self._edge_gap(pf))
+        bins = make_bins(pf, (s0, s1), angles, region, cfg, self._edge_gap(pf, factor))
         votes = accumulate(pf, features.segments, bins, p.either)
         t2 = time.perf_counter()
         timings["voting"] = t2 - t1
@@ -229,17 +230,18 @@ class Detector:
         return SearchResult(dets, planes(votes, bins, features.gradients), features, factor,
                             cands, timings)
 
-    def _edge_gap(self, pf) -> float | None:
-        """The pattern's :func:`.accumulator.edge_gap` when it is drawn with
-        borders (a shape, a marker: judged at the default chain length, also
-        when the search's is 0), else None (a texture, a line)."""
-        p, cfg = self.pattern, self.config
-        if p.is_line:
-            return None
-        if not p.has_long_borders(cfg if cfg.chain_length > 0
-                                  else cfg.replace(chain_length=Config().chain_length)):
-            return None
-        return edge_gap(pf, p.either)
+    def _edge_gap(self, pf, factor: float) -> float | None:
+        """The pattern's :func:`.accumulator.edge_gap` at working scale
+        ``factor`` (its features ``pf``) when it is drawn with borders (a
+        shape, a marker: judged at the default chain length, also when the
+        search's is 0), else None (a texture, a line). Kept per scale: the
+        pattern does not change between searches."""
+        if factor not in self._gaps:
+            p, cfg = self.pattern, self.config
+            drawn = not p.is_line and p.has_long_borders(
+                cfg if cfg.chain_length > 0 else cfg.replace(chain_length=Config().chain_length))
+            self._gaps[factor] = edge_gap(pf, p.either) if drawn else None
+        return self._gaps[factor]
 
     def _features_config(self) -> Config:
         """The Config of the image's features: key points weighted by their
