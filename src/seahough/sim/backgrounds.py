@@ -13,9 +13,9 @@ import numpy as np
 
 from .._data import shared_data_dir
 from ..errors import ImageReadError, ParameterError
-from ._util import Shape, _check_shape, _fast_normal, _noise, _to_bgr, _to_uint8
+from ._util import Shape, _check_shape, _fast_normal, _noise, _seed_of, _to_bgr, _to_uint8
 
-__all__ = ["seabed", "background"]
+__all__ = ["seabed", "tiled_floor", "background"]
 
 # Folders of the shared data that ``source="auto"`` never picks: the pool's
 # tiles are long straight lines and clean rectangles, i.e. marker look-alikes.
@@ -177,6 +177,83 @@ def seabed(shape: Shape = (480, 640), seed: int = 0) -> np.ndarray:
     return cv2.GaussianBlur(cv2.merge(planes), (0, 0), 0.6)
 
 
+def tiled_floor(shape: Shape = (480, 640), seed: int = 0, tile: float = 16.0) -> np.ndarray:
+    """Procedural pool floor: square tiles with light grout lines, a chain and
+    bricks lying on it, stains of silt.
+
+    The repeated texture of a pool (the shared data's ``subvo_pool_chain``)
+    is the trap for motion measurement: every tile looks like the next, so
+    a shift by one tile matches almost as well as the true motion. The
+    chain, the bricks and the stains are what tells one place from the next.
+
+    Parameters
+    ----------
+    shape : (int, int)
+        ``(height, width)`` in pixels.
+    seed : int
+    tile : float
+        The tiles' period in pixels (>= 6).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(height, width, 3)`` uint8 BGR image.
+
+    Examples
+    --------
+    >>> img = tiled_floor((64, 96), seed=1, tile=12)
+    >>> img.shape, str(img.dtype)
+    ((64, 96, 3), 'uint8')
+    >>> bool((img == tiled_floor((64, 96), seed=1, tile=12)).all())
+    True
+    """
+    h, w = _check_shape(shape)
+    if not tile >= 6:
+        raise ParameterError(f"tile must be at least 6 pixels, got {tile!r}")
+    rng = np.random.default_rng(seed)
+    hues = np.array([[150, 70, 30], [140, 110, 40], [120, 120, 110], [90, 130, 60]], np.float32)
+    base = hues[rng.integers(len(hues))] * np.float32(rng.uniform(0.8, 1.15))
+    grout = np.array([200, 205, 205], np.float32) * np.float32(rng.uniform(0.75, 1.0))
+    phi = math.radians(float(rng.uniform(-3, 3)))      # the lattice is laid a little askew
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    u = (xx * math.cos(phi) + yy * math.sin(phi)) / tile + rng.uniform(0, 1)
+    v = (-xx * math.sin(phi) + yy * math.cos(phi)) / tile + rng.uniform(0, 1)
+    # each tile a little lighter or darker; grout lines about 1/8 of the period
+    iu, iv = np.floor(u).astype(np.int64), np.floor(v).astype(np.int64)
+    jitter = rng.uniform(0.85, 1.12, 4096).astype(np.float32)
+    lum = jitter[(iu * 73 + iv * 151) % 4096]
+    fu, fv = u - iu, v - iv
+    half = np.float32(rng.uniform(0.05, 0.08))
+    line = np.clip(1.0 - np.minimum(np.minimum(fu, 1 - fu), np.minimum(fv, 1 - fv)) / half,
+                   0.0, 1.0)
+    img = (1 - line)[..., None] * (base * lum[..., None]) + line[..., None] * grout
+    # silt stains: soft light or dark patches
+    stain = 0.18 * _noise(rng, (h, w), 12 * tile) + 0.08 * _noise(rng, (h, w), 2 * tile)
+    img *= (1.0 + stain)[..., None]
+    # bricks and a chain: what is not repeated
+    area = h * w / (tile * tile)
+    for _ in range(int(rng.poisson(max(area / 1500, 1)))):
+        cx, cy = rng.uniform(0, w), rng.uniform(0, h)
+        bw, bh = rng.uniform(3, 6) * tile, rng.uniform(1.5, 3) * tile
+        box = cv2.boxPoints(((cx, cy), (bw, bh), rng.uniform(0, 180)))
+        col = np.array([60, 90, 110], np.float32) * np.float32(rng.uniform(0.6, 1.2))
+        cv2.fillPoly(img, [np.round(box * 8).astype(np.int32)], col.tolist(), cv2.LINE_AA, 3)
+    pts = [(rng.uniform(0, w), rng.uniform(0, h))]
+    for _ in range(6):
+        a = rng.uniform(0, 2 * math.pi)
+        d = rng.uniform(0.15, 0.4) * max(h, w)
+        pts.append((pts[-1][0] + d * math.cos(a), pts[-1][1] + d * math.sin(a)))
+    link = max(2.0, 0.35 * tile)
+    for (x0, y0), (x1, y1) in zip(pts, pts[1:]):
+        n = max(int(math.hypot(x1 - x0, y1 - y0) / link), 1)
+        for t in np.linspace(0, 1, n, endpoint=False):
+            c = (int(round((x0 + t * (x1 - x0)) * 8)), int(round((y0 + t * (y1 - y0)) * 8)))
+            col = np.array([50, 70, 90], np.float32) * np.float32(rng.uniform(0.5, 1.6))
+            cv2.circle(img, c, int(link * 4), col.tolist(), -1, cv2.LINE_AA, 3)
+    img += (4.0 * _fast_normal(rng, (h, w)))[..., None]
+    return cv2.GaussianBlur(_to_uint8(img), (0, 0), 0.6)
+
+
 # ----------------------------------------------------------------------------
 # real photos
 # ----------------------------------------------------------------------------
@@ -233,9 +310,11 @@ def _source_photo(rng: np.random.Generator, source) -> np.ndarray | None:
         return None
     if isinstance(source, str) and source == "auto":
         return _random_real_photo(rng)
+    if isinstance(source, str) and source == "tiles":
+        return tiled_floor((720, 960), _seed_of(rng), tile=float(rng.uniform(14, 28)))
     if isinstance(source, (str, Path)):
         return _load_image(source)
-    raise ParameterError(f"source must be 'auto', 'procedural', a path or an image, "
+    raise ParameterError(f"source must be 'auto', 'procedural', 'tiles', a path or an image, "
                          f"got {source!r}")
 
 
@@ -254,7 +333,8 @@ def background(shape: Shape = (480, 640), seed: int = 0,
         sequences, or ``seabed/*``; the tiled pool sequence is left out since
         tiles look like markers), picked at random, randomly cropped to the
         aspect of ``shape``, flipped and resized; :func:`seabed` when the
-        shared data is absent. ``"procedural"``: always :func:`seabed`. A path:
+        shared data is absent. ``"procedural"``: always :func:`seabed`.
+        ``"tiles"``: a pool floor (:func:`tiled_floor`). A path:
         that file, cropped and resized the same way.
 
     Returns

@@ -16,9 +16,13 @@ trajectory needs is the least-squares fit to that flow
 similarity explains.
 
 Conventions: world X, Y on the mean seabed (metres), Z up; the seabed is at
-height ``h(X, Y)`` (mean 0); the camera looks straight down from altitude
-``A`` above the mean seabed, its image x axis at angle ``yaw`` from world X.
-Occlusion is not modelled (the height field is smooth and seen from above).
+height ``h(X, Y)`` (mean 0); the camera is at altitude ``A`` above the mean
+seabed, its image x axis horizontal at angle ``yaw`` from world X; it looks
+straight down, or tilted forward by ``tilt`` degrees (its optical axis
+leaning towards the top of the image: a forward-oblique camera, as on an ROV
+or a pool robot, whose frames differ by a perspective change even over a
+flat floor). Occlusion is not modelled (the height field is smooth and seen
+from above).
 """
 
 from __future__ import annotations
@@ -33,7 +37,7 @@ import numpy as np
 from ..errors import ParameterError
 from ._util import ImageLike, Shape, _check_shape, _seed_of
 from ._views import _as_photo
-from .backgrounds import _source_photo
+from .backgrounds import _source_photo, tiled_floor
 from .water import Water, WaterLike, _as_water, apply_water
 
 __all__ = ["ReliefTruth", "relief_sequence"]
@@ -59,6 +63,8 @@ class ReliefTruth:
         ``origin`` (X, Y of cell (0, 0)).
     cell : float
     origin : (float, float)
+    tilt : float
+        The camera's forward tilt from straight down, degrees (0: downward).
     """
 
     cameras: np.ndarray
@@ -67,12 +73,24 @@ class ReliefTruth:
     heights: np.ndarray
     cell: float
     origin: tuple[float, float]
+    tilt: float = 0.0
 
     def _axes(self, i):
+        """Camera ``i``'s centre and its horizontal x and y axes (2-vectors)."""
         X, Y, A, yaw = self.cameras[i]
         xc = np.array([math.cos(yaw), math.sin(yaw)])
         yc = np.array([math.sin(yaw), -math.cos(yaw)])
         return X, Y, A, xc, yc
+
+    def _basis(self, i):
+        """Camera ``i``'s image x, image y and optical axes in the world (3-vectors):
+        the downward camera's, turned forward by :attr:`tilt` about its x axis."""
+        _, _, _, xc, yc = self._axes(i)
+        t = math.radians(self.tilt)
+        ex = np.array([xc[0], xc[1], 0.0])
+        ey = np.array([yc[0], yc[1], 0.0])
+        ez = np.array([0.0, 0.0, -1.0])
+        return ex, math.cos(t) * ey + math.sin(t) * ez, math.cos(t) * ez - math.sin(t) * ey
 
     def height_at(self, X, Y) -> np.ndarray:
         """Seabed height (metres) at world points (bilinear on the grid)."""
@@ -89,24 +107,28 @@ class ReliefTruth:
 
     def ground(self, i: int, u, v):
         """World (X, Y, Z) of frame ``i``'s pixels (u, v), cast onto the seabed."""
-        X0, Y0, A, xc, yc = self._axes(i)
+        X0, Y0, A, _, _ = self._axes(i)
+        ex, ey, ez = self._basis(i)
         h, w = self.shape
         a = (np.asarray(u, np.float64) - (w - 1) / 2) / self.focal
         b = (np.asarray(v, np.float64) - (h - 1) / 2) / self.focal
-        dx, dy = a * xc[0] + b * yc[0], a * xc[1] + b * yc[1]
-        t = np.full(a.shape, A)
-        for _ in range(_ITERATIONS):   # depth t along the axis: Z = A - t = h(X, Y)
-            t = A - self.height_at(X0 + t * dx, Y0 + t * dy)
-        return X0 + t * dx, Y0 + t * dy, A - t
+        # the ray of depth t (along the optical axis) reaches t (a ex + b ey + ez)
+        dx, dy = a * ex[0] + b * ey[0] + ez[0], a * ex[1] + b * ey[1] + ez[1]
+        down = -(b * ey[2] + ez[2])   # metres of descent per unit of depth (> 0)
+        t = A / down
+        for _ in range(_ITERATIONS):   # Z = A - t down = h(X, Y)
+            t = (A - self.height_at(X0 + t * dx, Y0 + t * dy)) / down
+        return X0 + t * dx, Y0 + t * dy, A - t * down
 
     def project(self, j: int, X, Y, Z):
         """Frame ``j``'s pixel (u, v) of world points."""
-        X0, Y0, A, xc, yc = self._axes(j)
+        X0, Y0, A, _, _ = self._axes(j)
+        ex, ey, ez = self._basis(j)
         h, w = self.shape
-        t = A - Z
-        rx, ry = X - X0, Y - Y0
-        u = self.focal * (rx * xc[0] + ry * xc[1]) / t + (w - 1) / 2
-        v = self.focal * (rx * yc[0] + ry * yc[1]) / t + (h - 1) / 2
+        rx, ry, rz = X - X0, Y - Y0, Z - A
+        t = rx * ez[0] + ry * ez[1] + rz * ez[2]
+        u = self.focal * (rx * ex[0] + ry * ex[1] + rz * ex[2]) / t + (w - 1) / 2
+        v = self.focal * (rx * ey[0] + ry * ey[1] + rz * ey[2]) / t + (h - 1) / 2
         return u, v
 
     def flow(self, i: int, j: int, step: int = 8):
@@ -156,8 +178,9 @@ def relief_sequence(image: ImageLike | None = None, *, n_frames: int = 6,
                     frame_size: Shape = (1024, 1360), altitude=(1.5, 3.0),
                     relief: float = 0.15, correlation: float = 0.4,
                     step=(0.16, 0.29), turn: float = 4.0, fov: float = 50.0,
-                    water: WaterLike = "moderate", seed: int = 0, source="auto"):
-    """Frames of a downward camera flying over a photo draped on relief.
+                    water: WaterLike = "moderate", seed: int = 0, source="auto",
+                    tilt: float = 0.0, forward: bool = False, strobe: bool = True):
+    """Frames of a camera flying over a photo draped on relief.
 
     Parameters
     ----------
@@ -186,7 +209,19 @@ def relief_sequence(image: ImageLike | None = None, *, n_frames: int = 6,
         The water; its ``distance`` is replaced by the true light path.
     seed : int
     source : str or path
-        Where the photo comes from when ``image`` is None.
+        Where the photo comes from when ``image`` is None; ``"tiles"``: a
+        pool floor (:func:`~seahough.sim.tiled_floor`, tiles 2.5-5 cm),
+        drawn at the ground's resolution.
+    tilt : float
+        The camera's forward tilt from straight down, degrees (0-60; the top
+        of the frame must still see the floor within 80 degrees of straight
+        down).
+    forward : bool
+        Move towards the top of the frame (where a tilted camera looks),
+        instead of in a random direction.
+    strobe : bool
+        Light from a strobe on the camera (falling off with the square of
+        the distance); False: daylight from straight above (a pool).
 
     Returns
     -------
@@ -222,19 +257,29 @@ def relief_sequence(image: ImageLike | None = None, *, n_frames: int = 6,
         raise ParameterError("relief must be >= 0 and correlation > 0")
     if relief > 0.25 * a0:
         raise ParameterError(f"relief {relief} m is too rough for an altitude of {a0} m")
-    rng = np.random.default_rng(seed)
     focal = (w / 2) / math.tan(math.radians(fov) / 2)
+    top = math.degrees(math.atan((h - 1) / 2 / focal))   # the top row's angle off the axis
+    if not (0.0 <= tilt <= 60.0 and tilt + top <= 80.0):
+        raise ParameterError(f"tilt must be 0-60 degrees with the top of the frame within 80 "
+                             f"degrees of straight down ({top:.0f} above the axis here), got "
+                             f"{tilt!r}")
+    rng = np.random.default_rng(seed)
+    cos_t = math.cos(math.radians(tilt))
     # the path: heading and yaw wander; each step a share of the frame's extent
     alt = float(rng.uniform(a0, a1))
     heading = float(rng.uniform(0, 2 * math.pi))
-    yaw = heading + float(rng.uniform(-math.pi, math.pi))
+    if forward:   # (the image's top, -y, points to yaw + 90 degrees in the world)
+        yaw = heading - 0.5 * math.pi
+    else:
+        yaw = heading + float(rng.uniform(-math.pi, math.pi))
     cams = []
     X = Y = 0.0
     for k in range(n):
         cams.append((X, Y, alt, yaw))
         rel = heading - yaw       # the motion's direction in the frame
         extent = abs(math.cos(rel)) * w + abs(math.sin(rel)) * h
-        d = float(rng.uniform(s0, s1)) * extent * alt / focal
+        # (the ground a pixel spans at the frame's centre: farther when tilted)
+        d = float(rng.uniform(s0, s1)) * extent * alt / (focal * cos_t ** 2)
         X, Y = X + d * math.cos(heading), Y + d * math.sin(heading)
         dturn = math.radians(float(rng.normal(0, turn)))
         heading += dturn
@@ -242,14 +287,28 @@ def relief_sequence(image: ImageLike | None = None, *, n_frames: int = 6,
         alt = float(np.clip(alt * (1 + rng.normal(0, 0.03)), a0 * 0.9, a1 * 1.1))
     cams = np.array(cams)
     # the ground seen: footprint corners of every frame, with a margin
-    half = np.hypot(w, h) / 2 / focal * (cams[:, 2].max() + 3 * relief)
-    lo = cams[:, :2].min(0) - half * 1.05
-    hi = cams[:, :2].max(0) + half * 1.05
+    if tilt == 0.0:
+        half = np.hypot(w, h) / 2 / focal * (cams[:, 2].max() + 3 * relief)
+        lo = cams[:, :2].min(0) - half * 1.05
+        hi = cams[:, :2].max(0) + half * 1.05
+    else:   # the corners cast onto the floor 3 relief deep
+        flat = ReliefTruth(cams, focal, (h, w), np.full((2, 2), -3 * relief, np.float32),
+                           1e6, (-5e5, -5e5), float(tilt))
+        u = np.array([0.0, w - 1, 0.0, w - 1]) + np.array([-1, 1, -1, 1]) * 0.05 * w
+        v = np.array([0.0, 0.0, h - 1, h - 1]) + np.array([-1, -1, 1, 1]) * 0.05 * h
+        xy = np.concatenate([np.stack(flat.ground(i, u, v)[:2], 1) for i in range(n)])
+        lo, hi = xy.min(0), xy.max(0)
     extent = hi - lo
     cell = 0.01
     heights = _height_field(rng, extent, cell, relief, correlation)
-    truth = ReliefTruth(cams, focal, (h, w), heights, cell, (float(lo[0]), float(lo[1])))
+    truth = ReliefTruth(cams, focal, (h, w), heights, cell, (float(lo[0]), float(lo[1])),
+                        float(tilt))
     photo = _as_photo(image)
+    if photo is None and isinstance(source, str) and source == "tiles":
+        tile_m = float(rng.uniform(0.025, 0.05))   # (10 photo pixels a tile)
+        mpp = tile_m / 10.0
+        photo = tiled_floor((int(math.ceil(extent[1] / mpp)), int(math.ceil(extent[0] / mpp))),
+                            _seed_of(rng), tile=10.0)
     if photo is None:
         photo = _source_photo(rng, source)
     if photo is None:
@@ -260,11 +319,12 @@ def relief_sequence(image: ImageLike | None = None, *, n_frames: int = 6,
     ph, pw = photo.shape[:2]
     metres_per_px = max(extent[0] / pw, extent[1] / ph)   # the photo covers the ground
     wat = _as_water(water)
-    frames = [_render(truth, i, photo, lo, metres_per_px, wat, rng) for i in range(n)]
+    frames = [_render(truth, i, photo, lo, metres_per_px, wat, rng, strobe) for i in range(n)]
     return frames, truth
 
 
-def _render(truth: ReliefTruth, i: int, photo, lo, mpp, wat: Water | None, rng):
+def _render(truth: ReliefTruth, i: int, photo, lo, mpp, wat: Water | None, rng,
+            strobe: bool = True):
     h, w = truth.shape
     v, u = np.mgrid[0:h, 0:w].astype(np.float32)
     X, Y, Z = truth.ground(i, u, v)
@@ -280,11 +340,14 @@ def _render(truth: ReliefTruth, i: int, photo, lo, mpp, wat: Water | None, rng):
     per_m = truth.focal / np.maximum(r, 1e-3)
     nx, ny = -gx * per_m, -gy * per_m
     # the light's direction along the frame's axes (the slopes are along them)
-    lx = ((X0 - X) * xc[0] + (Y0 - Y) * xc[1]) / r
-    ly = ((X0 - X) * yc[0] + (Y0 - Y) * yc[1]) / r
-    lz = (A - Z) / r
+    if strobe:
+        lx = ((X0 - X) * xc[0] + (Y0 - Y) * xc[1]) / r
+        ly = ((X0 - X) * yc[0] + (Y0 - Y) * yc[1]) / r
+        lz = (A - Z) / r
+    else:   # daylight from above: no fall-off
+        lx, ly, lz = 0.0, 0.0, 1.0
     lambert = np.clip((nx * lx + ny * ly + lz) / np.sqrt(nx ** 2 + ny ** 2 + 1), 0.05, 1.0)
-    light = (lambert * (A / r) ** 2).astype(np.float32)
+    light = (lambert * (A / r) ** 2 if strobe else lambert).astype(np.float32)
     if wat is not None:
         att = np.asarray(wat.attenuation, np.float32)
         bs = np.asarray(wat.backscatter, np.float32)
