@@ -15,8 +15,10 @@ from ._cache import kernel_cache
 
 with kernel_cache():
     from .edges import chain_lengths, edge_points, spread_points, trace_segments
-    from .matching import chance_coverage, evidence_counts, icp, match_points, snap_points
+    from .matching import (chance_coverage, evidence_counts, homography_icp, icp, match_points,
+                           snap_points)
     from .voting import MODE_ORIENTED, MODE_POINTS, MODE_SEGMENTS, local_maxima, vote
 
-__all__ = ["chain_lengths", "edge_points", "spread_points", "trace_segments", "chance_coverage", "evidence_counts", "icp", "match_points",
+__all__ = ["chain_lengths", "edge_points", "spread_points", "trace_segments", "chance_coverage", "evidence_counts", "homography_icp", "icp",
+           "match_points",
            "snap_points", "MODE_ORIENTED", "MODE_POINTS", "MODE_SEGMENTS", "local_maxima", "vote"]

@@ -12,6 +12,50 @@ from ._cache import CACHE
 from ._common import TWO_PI, _same_direction
 
 
+@njit(cache=CACHE, nogil=True, inline="always")
+def _nearest(x, y, want, ex, ey, eang, index, radius, ang_tol, either):
+    """The nearest edge point to (x, y) of direction compatible with ``want``
+    (in [0, 2 pi)) within ``radius``: ``(id, squared distance)``, id -1 when
+    there is none."""
+    h, w = index.shape
+    r = int(math.ceil(radius))
+    bestd = radius * radius + 1e-9
+    best = -1
+    cx = int(math.floor(x + 0.5))
+    cy = int(math.floor(y + 0.5))
+    if cx < -r or cy < -r or cx >= w + r or cy >= h + r:
+        return best, bestd
+    # rings of pixels around (cx, cy), nearest first. An edge point lies
+    # within half a pixel of its pixel and (x, y) within half a pixel of
+    # (cx, cy), so everything in ring k and beyond is at least k - 1 away:
+    # once a match closer than that is found, the outer rings cannot win.
+    for k in range(r + 1):
+        if k >= 1 and bestd < (k - 1) * (k - 1):
+            break
+        for yy in range(cy - k, cy + k + 1):
+            if yy < 0 or yy >= h:
+                continue
+            edge_row = yy == cy - k or yy == cy + k
+            step = 1 if edge_row else 2 * k
+            for xx in range(cx - k, cx + k + 1, max(step, 1)):
+                if xx < 0 or xx >= w:
+                    continue
+                j = index[yy, xx]
+                if j < 0:
+                    continue
+                # nearer than the best so far (cheap) before the direction
+                ddx = ex[j] - x
+                ddy = ey[j] - y
+                d2 = ddx * ddx + ddy * ddy
+                if d2 >= bestd:
+                    continue
+                if not _same_direction(eang[j], want, ang_tol, either):
+                    continue
+                bestd = d2
+                best = j
+    return best, bestd
+
+
 @njit(cache=CACHE, nogil=True)
 def match_points(px, py, pang, a, b, tx, ty, ex, ey, eang, index, radius, ang_tol, either):
     """For each pattern point mapped by the pose, the nearest image edge point
@@ -23,52 +67,16 @@ def match_points(px, py, pang, a, b, tx, ty, ex, ey, eang, index, radius, ang_to
     the distance.
     """
     n = px.shape[0]
-    h, w = index.shape
     out = -np.ones(n, np.int64)
     dist = np.full(n, np.inf)
     phi = math.atan2(b, a)
-    r = int(math.ceil(radius))
-    r2 = radius * radius
     for i in range(n):
         x = tx + a * px[i] + b * py[i]
         y = ty - b * px[i] + a * py[i]
-        cx = int(math.floor(x + 0.5))
-        cy = int(math.floor(y + 0.5))
-        if cx < -r or cy < -r or cx >= w + r or cy >= h + r:
-            continue
         # the wanted direction in [0, 2 pi), as the edges' are (_same_direction)
         want = pang[i] - phi
         want -= TWO_PI * math.floor(want / TWO_PI)
-        bestd = r2 + 1e-9
-        best = -1
-        # rings of pixels around (cx, cy), nearest first. An edge point lies
-        # within half a pixel of its pixel and (x, y) within half a pixel of
-        # (cx, cy), so everything in ring k and beyond is at least k - 1 away:
-        # once a match closer than that is found, the outer rings cannot win.
-        for k in range(r + 1):
-            if k >= 1 and bestd < (k - 1) * (k - 1):
-                break
-            for yy in range(cy - k, cy + k + 1):
-                if yy < 0 or yy >= h:
-                    continue
-                edge_row = yy == cy - k or yy == cy + k
-                step = 1 if edge_row else 2 * k
-                for xx in range(cx - k, cx + k + 1, max(step, 1)):
-                    if xx < 0 or xx >= w:
-                        continue
-                    j = index[yy, xx]
-                    if j < 0:
-                        continue
-                    # nearer than the best so far (cheap) before the direction
-                    ddx = ex[j] - x
-                    ddy = ey[j] - y
-                    d2 = ddx * ddx + ddy * ddy
-                    if d2 >= bestd:
-                        continue
-                    if not _same_direction(eang[j], want, ang_tol, either):
-                        continue
-                    bestd = d2
-                    best = j
+        best, bestd = _nearest(x, y, want, ex, ey, eang, index, radius, ang_tol, either)
         if best >= 0:
             out[i] = best
             dist[i] = math.sqrt(bestd)
@@ -424,3 +432,165 @@ def evidence_counts(px, py, pang, a, b, tx, ty, ids, cover, ox, oy, cell, h, w, 
         if ids[i] >= 0:
             k_eff += min(1.0, covers)
     return n_eff, m_eff, k_eff, psum / cnt if cnt > 0 else 0.0
+
+
+@njit(cache=CACHE, nogil=True)
+def _solve_spd(m, v):
+    """Solve ``m x = v`` (a small symmetric positive system) by Gaussian
+    elimination with partial pivoting; NaNs when singular."""
+    n = v.shape[0]
+    a = m.copy()
+    b = v.copy()
+    for c in range(n):
+        p = c
+        for r in range(c + 1, n):
+            if abs(a[r, c]) > abs(a[p, c]):
+                p = r
+        if abs(a[p, c]) < 1e-300:
+            return np.full(n, np.nan)
+        if p != c:
+            for k in range(n):
+                a[c, k], a[p, k] = a[p, k], a[c, k]
+            b[c], b[p] = b[p], b[c]
+        for r in range(c + 1, n):
+            f = a[r, c] / a[c, c]
+            for k in range(c, n):
+                a[r, k] -= f * a[c, k]
+            b[r] -= f * b[c]
+    out = np.empty(n)
+    for r in range(n - 1, -1, -1):
+        acc = b[r]
+        for k in range(r + 1, n):
+            acc -= a[r, k] * out[k]
+        out[r] = acc / a[r, r]
+    return out
+
+
+@njit(cache=CACHE, nogil=True)
+def homography_icp(px, py, pang, hom, ex, ey, eang, enx, eny, index, radii, iterations,
+                   ang_tol, stride, score_radius):
+    """Refine a homography (3x3 ``hom``: point (x, y) -> image pixel) of the
+    points ``px, py`` (gradient directions ``pang``) on the image's edge
+    points, with shrinking match radii, then score it.
+
+    Each iteration maps every point (every ``stride``-th while the radius
+    exceeds 2 px) and its gradient direction (turned by the inverse
+    transpose of the homography's Jacobian there), matches it to the
+    nearest edge point of compatible direction within the radius, and
+    solves the weighted least squares of the point-to-edge distances along
+    the edge normals (Huber weights, half the radius) for the homography's
+    8 parameters, in coordinates normalised to the points' spread. Returns
+    ``(hom, score)``: the refined homography (``hom[2, 2] = 1``) and the
+    share of the points with a compatible edge within ``score_radius``.
+    """
+    n = px.shape[0]
+    if n == 0:
+        return hom.copy(), 0.0
+    cx = px.mean()
+    cy = py.mean()
+    sc = max(math.sqrt(((px - cx) ** 2).mean()), math.sqrt(((py - cy) ** 2).mean()), 1.0)
+    # hn = hom @ inverse(normalisation): normalised point -> image pixel
+    hn = np.empty((3, 3))
+    for r in range(3):
+        hn[r, 0] = hom[r, 0] * sc
+        hn[r, 1] = hom[r, 1] * sc
+        hn[r, 2] = hom[r, 0] * cx + hom[r, 1] * cy + hom[r, 2]
+    hn /= hn[2, 2]
+    A = np.empty((8, 8))
+    g = np.empty(8)
+    jr = np.empty(8)
+    for ri in range(radii.shape[0]):
+        rad = radii[ri]
+        step = stride if rad > 2.0 else 1
+        c = max(0.5 * rad, 1.0)
+        for _ in range(iterations):
+            A[:] = 0.0
+            g[:] = 0.0
+            m = 0
+            for i in range(0, n, step):
+                x = (px[i] - cx) / sc
+                y = (py[i] - cy) / sc
+                w = hn[2, 0] * x + hn[2, 1] * y + hn[2, 2]
+                if w <= 1e-9:
+                    continue
+                u = (hn[0, 0] * x + hn[0, 1] * y + hn[0, 2]) / w
+                v = (hn[1, 0] * x + hn[1, 1] * y + hn[1, 2]) / w
+                j11 = (hn[0, 0] - u * hn[2, 0]) / w
+                j12 = (hn[0, 1] - u * hn[2, 1]) / w
+                j21 = (hn[1, 0] - v * hn[2, 0]) / w
+                j22 = (hn[1, 1] - v * hn[2, 1]) / w
+                ca = math.cos(pang[i])
+                sa = math.sin(pang[i])
+                det = j11 * j22 - j12 * j21
+                sg = 1.0 if det >= 0 else -1.0
+                want = math.atan2(sg * (-j12 * ca + j11 * sa), sg * (j22 * ca - j21 * sa))
+                want -= TWO_PI * math.floor(want / TWO_PI)
+                j, _ = _nearest(u, v, want, ex, ey, eang, index, rad, ang_tol, False)
+                if j < 0:
+                    continue
+                nx = enx[j]
+                ny = eny[j]
+                res = nx * (u - ex[j]) + ny * (v - ey[j])
+                t = nx * u + ny * v
+                jr[0] = nx * x / w
+                jr[1] = nx * y / w
+                jr[2] = nx / w
+                jr[3] = ny * x / w
+                jr[4] = ny * y / w
+                jr[5] = ny / w
+                jr[6] = -t * x / w
+                jr[7] = -t * y / w
+                wt = 1.0 if abs(res) <= c else c / abs(res)
+                for k in range(8):
+                    g[k] -= wt * jr[k] * res
+                    for l in range(k, 8):
+                        A[k, l] += wt * jr[k] * jr[l]
+                m += 1
+            if m < 12:
+                break
+            tr = 0.0
+            for k in range(8):
+                tr += A[k, k]
+                for l in range(k):
+                    A[k, l] = A[l, k]
+            for k in range(8):
+                A[k, k] += 1e-6 * tr / 8.0
+            dh = _solve_spd(A, g)
+            if np.isnan(dh[0]):
+                break
+            moved = 0.0
+            for k in range(8):
+                hn[k // 3, k % 3] += dh[k]
+                moved = max(moved, abs(dh[k]))
+            if not np.all(np.isfinite(hn)) or abs(hn[2, 2]) < 1e-12:
+                return hom.copy(), 0.0
+            hn /= hn[2, 2]
+            if moved < 0.02:   # (pixels, about: the parameters move points by that)
+                break
+    # back to pixel coordinates: hom = hn @ normalisation
+    out = np.empty((3, 3))
+    for r in range(3):
+        out[r, 0] = hn[r, 0] / sc
+        out[r, 1] = hn[r, 1] / sc
+        out[r, 2] = hn[r, 2] - (hn[r, 0] * cx + hn[r, 1] * cy) / sc
+    out /= out[2, 2]
+    matched = 0
+    for i in range(n):
+        w = out[2, 0] * px[i] + out[2, 1] * py[i] + out[2, 2]
+        if w <= 1e-9:
+            continue
+        u = (out[0, 0] * px[i] + out[0, 1] * py[i] + out[0, 2]) / w
+        v = (out[1, 0] * px[i] + out[1, 1] * py[i] + out[1, 2]) / w
+        j11 = (out[0, 0] - u * out[2, 0]) / w
+        j12 = (out[0, 1] - u * out[2, 1]) / w
+        j21 = (out[1, 0] - v * out[2, 0]) / w
+        j22 = (out[1, 1] - v * out[2, 1]) / w
+        ca = math.cos(pang[i])
+        sa = math.sin(pang[i])
+        sg = 1.0 if j11 * j22 - j12 * j21 >= 0 else -1.0
+        want = math.atan2(sg * (-j12 * ca + j11 * sa), sg * (j22 * ca - j21 * sa))
+        want -= TWO_PI * math.floor(want / TWO_PI)
+        j, _ = _nearest(u, v, want, ex, ey, eang, index, score_radius, ang_tol, False)
+        if j >= 0:
+            matched += 1
+    return out, matched / n
