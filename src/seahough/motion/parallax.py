@@ -128,6 +128,15 @@ def strongest(edges: EdgePoints, count: int = MAX_POINTS):
             edges.angle[order].astype(np.float64))
 
 
+def frame_points(pattern, factor: float, config, count: int = MAX_POINTS):
+    """The previous frame's gradients at working scale ``factor`` and its
+    ``count`` :func:`strongest` edge points (x, y, angle)."""
+    # (the pattern's own levels: 8 bits are downscaled as they are, not copied
+    # to float at full resolution; a frame pattern is grey)
+    grad = compute_gradients(pattern.grey_levels(), factor, config.equalize)
+    return grad, strongest(find_edge_points(grad, config.min_gradient), count)
+
+
 def _fit_similarity(c, q, weight, known=None, keep=(False, False)):
     """Weighted least-squares similarity c -> q (2x3), None when degenerate.
     ``keep`` = (scale, rotation): those of the 2x3 matrix ``known`` are kept
@@ -285,7 +294,7 @@ def _candidate_matrix(pose, owx: float, owy: float) -> np.ndarray:
 
 
 def check_locally(pattern, result, detection, region, scale_range, angle_range, config,
-                  candidates: int = CANDIDATES) -> LocalCheck | None:
+                  candidates: int = CANDIDATES, frame=None) -> LocalCheck | None:
     """Choose a frame pair's motion by its evidence measured tile by tile.
 
     ``pattern`` is the previous frame (:meth:`~seahough.Pattern.from_frame`),
@@ -303,7 +312,8 @@ def check_locally(pattern, result, detection, region, scale_range, angle_range, 
     answer`` of their working-scale scores). The matrix is the similarity
     fitted to the chosen pose's tile shifts; ``parallax`` is measured
     against it. None when too little of the frame is in view to cut it
-    into tiles.
+    into tiles. ``frame``: the previous frame's :func:`frame_points` at
+    the search's working scale, when already made.
     """
     feats = result.features
     if feats is None:
@@ -311,10 +321,7 @@ def check_locally(pattern, result, detection, region, scale_range, angle_range, 
     fx, fy, factor = feats.gradients.fx, feats.gradients.fy, result.factor
     tol = math.radians(config.angle_tolerance)
     radius = max(1.25, config.match_radius * factor)   # (the search's evidence radius)
-    # (the pattern's own levels: 8 bits are downscaled as they are, not copied
-    # to float at full resolution; a frame pattern is grey)
-    grad = compute_gradients(pattern.grey_levels(), factor, config.equalize)
-    points = strongest(find_edge_points(grad, config.min_gradient))
+    grad, points = frame or frame_points(pattern, factor, config)
     bg = background(feats.edges, radius, tol, None, feats.index)
     x0, y0, x1, y1 = region
     fh, fw = feats.gradients.full_shape[:2]

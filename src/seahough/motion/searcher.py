@@ -91,7 +91,7 @@ class Searcher:
         return measure_pair(pattern, gray, s_range, (a0, a1), region,
                             min_score=self.tuning.min_score,
                             min_confidence=self.tuning.min_confidence, config=cfg,
-                            features=feats, rescue=rescue)
+                            features=feats, rescue=rescue, perspective=False)
 
     def ranges_around(self, base, n: int, widen: int = 1):
         """Scale and angle ranges of the user's per-pair ranges, ``n`` frames
