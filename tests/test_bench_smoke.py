@@ -174,6 +174,30 @@ def test_relief_benchmark_quick(tmp_path):
     assert all(re.match(r"\d+/3 ", r[2]) for r in odo), odo
 
 
+def test_oblique_benchmark_quick(tmp_path):
+    """bench/bench_oblique.py --quick: both parts, every method, counts that add up."""
+    if shared_data_dir() is None:
+        pytest.skip("real data (../shared/data) is not present beside this checkout")
+    text = _quick_page(ROOT / "bench" / "bench_oblique.py", tmp_path / "oblique.md")
+    assert "Machine:" in text and "Command:" in text and "Split: tune part" in text
+    assert re.search(r"Loops closed and consistent by seahough: \d+/2 ", text)
+    for part in ("## Test part", "## Tune part"):
+        rows = _rows(_section(text, part))
+        head, body = rows[0], rows[1:]
+        col = {h: i for i, h in enumerate(head)}
+        assert {r[1] for r in body} >= {"seahough", "seahough, similarity only", "SIFT+RANSAC",
+                                         "phase correlation"}
+        for r in body:
+            answered = re.match(r"(\d+)/(\d+)", r[col["answered"]])
+            assert answered.group(2) == r[col["pairs"]] == "5", r
+            right = re.match(r"(\d+)/(\d+)", r[col["within 2 % (of answers)"]])
+            assert right.group(2) == answered.group(1), r
+            loops = re.match(r"(\d+)/(\d+)", r[col["loops closed"]])
+            assert loops.group(2) == "2" and int(loops.group(1)) <= 2, r
+    pairs = _rows(_section(text, "## The pairs"))[1:]
+    assert len(pairs) == 10 and {r[0] for r in pairs} == {"test", "tune"}
+
+
 def test_small_patch_benchmark_quick(tmp_path):
     """bench/bench_small_patch.py --quick: the tables, counts that add up."""
     if shared_data_dir() is None:

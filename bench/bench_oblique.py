@@ -1,0 +1,228 @@
+"""Forward-oblique camera pairs over a tiled pool floor or a seabed (rendered, exact truth).
+
+A camera that looks ahead and down (a pool robot, an ROV) and moves forward
+sees the floor expand from a point near the horizon: its frames differ by a
+perspective change, not a similarity, even over a flat floor. Over a tiled
+pool every tile looks like the next, so a shift by a tile or two matches
+almost as well as the true motion. The real example, the shared data's
+``subvo_pool_chain``, is in the test part of bench_real_pairs.py; here the
+same kind of sequence is rendered with exact truth
+(``seahough.sim.relief_sequence`` with ``tilt`` and ``forward``): 1280x720
+frames, 50 degrees across, tilted 30-50 degrees from straight down, 1-2 m
+above the floor, moving forward 6-15 % of the frame a step, turning by about
+2 degrees; a procedural pool floor (``sim.tiled_floor``: tiles of 2.5-5 cm,
+a chain, bricks, silt stains; daylight from above, 1 cm of relief) or a
+real seabed photo draped on 5-10 cm of relief (strobe on the camera);
+clear, oceanic or moderate water.
+
+Truth: the similarity that fits the true per-pixel motion best
+(``ReliefTruth.similarity``, least squares over the overlap); what it leaves
+is the perspective and parallax (RMS, reported: about 1 % of the diagonal).
+An answer is *right* within 2 % of the diagonal of it (corners), *wrong*
+beyond 5 %. Each sequence has 4 frames: 3 consecutive pairs and 2 pairs one
+frame apart; a loop (frames k, k+1, k+2) is *closed* when its three pairs
+are answered, and *consistent* when (k+1 -> k+2) o (k -> k+1) agrees with
+k -> k+2 within 2 % of the diagonal.
+
+Split: tune part = the tiled floors of seeds 0-5 and dtu_seabed_pair/scene1.png
+(seeds 0-1); test part = the tiled floors of seeds 100-105,
+aqualoc_amphorae_wreck/frame_040.png and dtu_seabed_pair/scene2.png (seeds
+0-1). Methods and timing as bench_real_pairs.py (CPU time, single thread;
+seahough ``estimate_motion`` at its defaults), and seahough with its
+homography check switched off ("similarity only": as before the check).
+
+    python bench/bench_oblique.py --write   # docs/oblique.md (~4 min)
+    python bench/bench_oblique.py --quick   # 2 sequences at 640x360 (~15 s)
+    python bench/bench_oblique.py --part tune --out /tmp/oblique.md
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import page_head, page_parser, publish  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+import bench_real_pairs as R  # noqa: E402
+import seahough.motion.pair as P  # noqa: E402
+from seahough import sim  # noqa: E402
+from seahough.geometry import compose  # noqa: E402
+from seahough._data import shared_data_dir  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+DOC = ROOT / "docs" / "oblique.md"
+SCENE1 = "sequences/dtu_seabed_pair/scene1.png"
+TUNE = [("tiles", s) for s in range(6)] + [(SCENE1, s) for s in range(2)]
+TEST = ([("tiles", s) for s in range(100, 106)]
+        + [(p, s) for p in ("sequences/aqualoc_amphorae_wreck/frame_040.png",
+                            "sequences/dtu_seabed_pair/scene2.png") for s in range(2)])
+WATERS = ("clear", "oceanic", "moderate")
+PAIRS = ((0, 1), (1, 2), (2, 3), (0, 2), (1, 3))
+LOOPS = ((0, 1, 2), (1, 2, 3))
+RIGHT = 0.02       # an answer within this share of the diagonal of the best similarity
+WRONG = 0.05       # ... and wrong beyond this
+CONSISTENT = 0.02  # a loop's inconsistency within this share of the diagonal
+TARGET_LOOPS = 0.9 # issue 13: the tiled pool closes at least 9 loops in 10
+
+
+BEFORE = "seahough, similarity only"
+
+
+def _similarity_only(a, b):
+    """seahough as it was before the homography check (motion/perspective.py):
+    the check switched off, for the comparison in the same run."""
+    real = P.check_perspective
+    P.check_perspective = lambda *args, **kw: None
+    try:
+        return R.METHOD_FNS["seahough"](a, b)
+    finally:
+        P.check_perspective = real
+
+
+METHOD_FNS = {**R.METHOD_FNS, BEFORE: _similarity_only}
+METHODS = R.METHODS[:1] + (BEFORE,) + R.METHODS[1:]
+
+
+def render(source: str, seed: int, size=(720, 1280)):
+    rng = np.random.default_rng(1000 + seed)
+    tiles = source == "tiles"
+    src = source if tiles else str(shared_data_dir() / source)
+    return sim.relief_sequence(
+        source=src, seed=seed, n_frames=4, frame_size=size,
+        tilt=float(rng.uniform(30, 50)), forward=True, strobe=not tiles,
+        relief=0.01 if tiles else float(rng.uniform(0.05, 0.10)), altitude=(1.0, 2.0),
+        step=(0.06, 0.15), turn=2.0, water=WATERS[seed % 3])
+
+
+def label(source: str) -> str:
+    return "tiled floor" if source == "tiles" else Path(source).name
+
+
+def measure(source: str, part: str, seed: int, size=(720, 1280)) -> dict:
+    frames, truth = render(source, seed, size)
+    shape = frames[0].shape[:2]
+    pairs = {}
+    for i, j in PAIRS:
+        m, parallax = truth.similarity(i, j)
+        ans = {}
+        for name, fn in METHOD_FNS.items():
+            r, ms = R.cpu_timed(fn, frames[i], frames[j])
+            mat = None if r is None or r.matrix is None else np.asarray(r.matrix, float)
+            ans[name] = dict(matrix=mat, ms=ms, err=R.corner_error(mat, m, shape))
+            if name.startswith("seahough") and r is not None:
+                ans[name].update(nfa=float(r.nfa), confidence=float(r.confidence))
+        pairs[(i, j)] = dict(truth=m, parallax=parallax, ans=ans)
+    return dict(source=source, kind=label(source), seed=seed, part=part, shape=shape,
+                tilt=truth.tilt, pairs=pairs)
+
+
+def loop_cells(recs, method):
+    closed = consistent = n = 0
+    for rec in recs:
+        d = R.diagonal(rec["shape"])
+        for a, b, c in LOOPS:
+            n += 1
+            m1, m2, m13 = (rec["pairs"][k]["ans"][method]["matrix"]
+                           for k in ((a, b), (b, c), (a, c)))
+            if m1 is None or m2 is None or m13 is None:
+                continue
+            closed += 1
+            consistent += R.corner_error(compose(m2, m1), m13, rec["shape"]) <= CONSISTENT * d
+    return n, closed, consistent
+
+
+def pair_cells(recs, method):
+    rows = [(rec, p) for rec in recs for p in rec["pairs"].values()]
+    ans = [(rec, p) for rec, p in rows if p["ans"][method]["matrix"] is not None]
+    rel = [p["ans"][method]["err"] / R.diagonal(rec["shape"]) for rec, p in ans]
+    wrong = [(rec, p) for (rec, p), e in zip(ans, rel) if e > WRONG]
+    cells = [str(len(rows)), R.pct(len(ans), len(rows)), R.pct(sum(e <= RIGHT for e in rel),
+                                                                  len(ans))]
+    w = str(len(wrong))
+    if method.startswith("seahough"):
+        w += f" (NFA <= {R.MAX_NFA:g}: {sum(p['ans'][method]['nfa'] <= R.MAX_NFA for _, p in wrong)})"
+    n, closed, consistent = loop_cells(recs, method)
+    return cells + [w, R.fnum(100 * float(np.median(rel)) if rel else math.nan),
+                    R.pct(closed, n), R.pct(consistent, n),
+                    R.fnum(float(np.median([p["ans"][method]["ms"] for _, p in rows])), 1)]
+
+
+HEAD = ["pairs", "answered", "within 2 % (of answers)", "off > 5 %", "median error % diag",
+        "loops closed", "loops consistent (2 %)", "median CPU ms"]
+
+
+def page(recs, seconds: float, quick: bool) -> str:
+    lines = page_head("Forward-oblique camera pairs (rendered, exact truth)", seconds)
+    lines += ["Split: tune part = " + ", ".join(sorted({label(s) for s, _ in TUNE}))
+              + " (tiled floors: seeds 0-5); test part = "
+              + ", ".join(sorted({label(s) for s, _ in TEST}))
+              + " (tiled floors: seeds 100-105). Targets are judged on the test part only.", "",
+              "How it is made and measured: bench/bench_oblique.py's docstring. Error = largest "
+              "corner distance to the similarity that fits the true motion best; right within "
+              f"{100 * RIGHT:.0f} %, wrong beyond {100 * WRONG:.0f} % of the diagonal.", ""]
+    if quick:
+        lines += ["**Quick run** (a smoke test, not a result).", ""]
+    test_tiles = [r for r in recs if r["part"] == "test" and r["source"] == "tiles"]
+    if test_tiles:
+        n, closed, consistent = loop_cells(test_tiles, "seahough")
+        ok = consistent >= TARGET_LOOPS * n
+        lines += ["## Target (test part, tiled floors)", "",
+                  f"Loops closed and consistent by seahough: {consistent}/{n} "
+                  f"(target at least {100 * TARGET_LOOPS:.0f} %, as issue 13 asks of the real "
+                  f"tiled pool): **{'met' if ok else 'missed'}**.", ""]
+    for part in ("test", "tune"):
+        sub = [r for r in recs if r["part"] == part]
+        if not sub:
+            continue
+        lines += [f"## {part.capitalize()} part", ""]
+        rows = []
+        for kind in sorted({r["kind"] for r in sub}):
+            for method in METHODS:
+                rows.append([kind, method] + pair_cells([r for r in sub if r["kind"] == kind],
+                                                        method))
+        lines += R.table(["floor", "method"] + HEAD, rows) + [""]
+    lines += ["## The pairs", "",
+              "Perspective and parallax the best similarity leaves (RMS px), and seahough's "
+              "answer (error % of the diagonal, confidence, NFA; '-' = declined).", ""]
+    rows = []
+    for r in recs:
+        for (i, j), p in r["pairs"].items():
+            a = p["ans"]["seahough"]
+            got = ("-" if a["matrix"] is None else
+                   f"{100 * a['err'] / R.diagonal(r['shape']):.2f} % ({a['confidence']:.2f}, "
+                   f"{a['nfa']:.1e})")
+            rows.append([r["part"], f"{r['kind']} seed {r['seed']}", f"{r['tilt']:.0f}",
+                         f"{i}-{j}", R.fnum(p["parallax"], 1), got])
+    lines += R.table(["part", "sequence", "tilt deg", "pair", "parallax px", "seahough"], rows)
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    ap = page_parser(__doc__, "oblique.md", "a smoke run: 2 sequences at 640x360")
+    ap.add_argument("--part", choices=("tune", "test", "both"), default="both",
+                    help="render and measure only this part (tuning: --part tune)")
+    args = ap.parse_args(argv)
+    if shared_data_dir() is None:
+        print("bench_oblique: ../shared/data not found", file=sys.stderr)
+        return 2
+    t0 = time.time()
+    jobs = ([(s, "tune") for s in TUNE] if args.part != "test" else []) + \
+           ([(s, "test") for s in TEST] if args.part != "tune" else [])
+    if args.quick:   # the first sequence of each part
+        jobs = [j for k, j in enumerate(jobs) if k == 0 or jobs[k - 1][1] != j[1]]
+    recs = []
+    for (source, seed), part in jobs:
+        t = time.time()
+        recs.append(measure(source, part, seed, (360, 640) if args.quick else (720, 1280)))
+        R.log(f"{label(source)} seed {seed}: {time.time() - t:.0f} s")
+    publish(page(recs, time.time() - t0, args.quick), args, DOC)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
