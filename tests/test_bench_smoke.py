@@ -192,6 +192,8 @@ def test_oblique_benchmark_quick(tmp_path):
             assert answered.group(2) == r[col["pairs"]] == "5", r
             right = re.match(r"(\d+)/(\d+)", r[col["within 2 % (of answers)"]])
             assert right.group(2) == answered.group(1), r
+            flow = r[col["median excess flow RMS % diag"]]   # (the best similarity's is least)
+            assert flow == "-" or float(flow) >= -0.01, r
             loops = re.match(r"(\d+)/(\d+)", r[col["loops closed"]])
             assert loops.group(2) == "2" and int(loops.group(1)) <= 2, r
     pairs = _rows(_section(text, "## The pairs"))[1:]

@@ -81,6 +81,31 @@ def test_a_flat_floor_seen_obliquely_is_a_homography_not_a_similarity():
     assert math.hypot(m[0, 0], m[1, 0]) > 1.0
 
 
+def test_tilt_zero_casts_rays_as_the_downward_camera_did():
+    # the downward camera's closed forms (before the tilt was added): a pixel's
+    # ray reaches depth t along the axis at t (a xc + b yc) off the nadir, and
+    # a world point projects at focal * (r . xc, r . yc) / (A - Z)
+    _, truth = sim.relief_sequence(n_frames=2, frame_size=(96, 128), seed=1,
+                                   source="procedural", water=None, relief=0.1)
+    X0, Y0, A, xc, yc = truth._axes(1)
+    u = np.array([0.0, 40.0, 127.0, 90.0])
+    v = np.array([0.0, 70.0, 95.0, 10.0])
+    a = (u - 63.5) / truth.focal
+    b = (v - 47.5) / truth.focal
+    dx, dy = a * xc[0] + b * yc[0], a * xc[1] + b * yc[1]
+    t = np.full(a.shape, A)
+    for _ in range(8):
+        t = A - truth.height_at(X0 + t * dx, Y0 + t * dy)
+    X, Y, Z = truth.ground(1, u, v)
+    assert np.array_equal(X, X0 + t * dx) and np.array_equal(Y, Y0 + t * dy)
+    assert np.array_equal(Z, A - t)
+    rx, ry = X - X0, Y - Y0
+    pu = truth.focal * (rx * xc[0] + ry * xc[1]) / (A - Z) + 63.5
+    pv = truth.focal * (rx * yc[0] + ry * yc[1]) / (A - Z) + 47.5
+    bu, bv = truth.project(1, X, Y, Z)
+    assert np.allclose(bu, pu, atol=1e-9) and np.allclose(bv, pv, atol=1e-9)
+
+
 def test_tilt_zero_renders_what_the_downward_camera_did():
     a, ta = sim.relief_sequence(n_frames=2, frame_size=(96, 128), seed=1, source="procedural",
                                 water=None)
@@ -131,17 +156,18 @@ def test_the_homography_fit_finds_a_known_homography(H):
     seen = cv2.warpPerspective(img, H, (260, 200))
     _, pts = _points(img)
     cur, _ = _points(seen)
-    fit, score = PP.homography_icp(np.eye(3), pts, cur, cur.index_map(), math.radians(20))
-    assert score > 0.85
+    fit, score, inside = PP.homography_icp(np.eye(3), pts, cur, cur.index_map(),
+                                           math.radians(20))
+    assert score > 0.85 and inside > 0.9
     c = np.array([[0, 0], [259, 0], [259, 199], [0, 199]], float)
     got = cv2.perspectiveTransform(c[None], fit)[0]
     want = cv2.perspectiveTransform(c[None], H)[0]
     assert np.abs(got - want).max() < 0.3
     # the kernel and its wrapper agree
-    raw, s2 = K.homography_icp(*pts, np.eye(3), cur.x, cur.y, cur.angle, cur.nx, cur.ny,
-                               cur.index_map(), np.array(PP.RADII), PP.ITERATIONS,
-                               math.radians(20), PP.STRIDE, 1.5)
-    assert np.allclose(raw, fit) and s2 == score
+    raw, s2, i2 = K.homography_icp(*pts, np.eye(3), cur.x, cur.y, cur.angle, cur.nx, cur.ny,
+                                   cur.index_map(), np.array(PP.RADII), PP.ITERATIONS,
+                                   math.radians(20), PP.STRIDE, 1.5)
+    assert np.allclose(raw, fit) and s2 == score and i2 == inside
 
 
 def test_a_fit_from_far_off_does_not_claim_the_match():
@@ -150,8 +176,8 @@ def test_a_fit_from_far_off_does_not_claim_the_match():
     _, pts = _points(img)
     cur, _ = _points(seen)
     start = np.array([[1.0, 0, 40.0], [0, 1.0, 30.0], [0, 0, 1.0]])    # far beyond the radii
-    _, score = PP.homography_icp(start, pts, cur, cur.index_map(), math.radians(20))
-    assert score < 0.3
+    _, score, inside = PP.homography_icp(start, pts, cur, cur.index_map(), math.radians(20))
+    assert score < 0.3 and score < 0.5 * inside
 
 
 def test_map_points_turns_gradients_with_the_homography():
@@ -161,6 +187,25 @@ def test_map_points_turns_gradients_with_the_homography():
     _, _, a = PP.map_points(H, np.array([3.0, 10.0]), np.array([4.0, -2.0]),
                             np.array([0.0, 1.0]))
     assert np.allclose(a, [t, 1.0 + t])
+
+
+def test_map_points_keeps_gradients_normal_to_the_mapped_edges():
+    # under a perspective change, a gradient mapped by the inverse transpose
+    # of the Jacobian stays normal to the edge mapped by the homography
+    H = np.array([[1.05, 0.03, 4.0], [-0.02, 0.97, 2.0], [3e-4, -2e-4, 1.0]])
+    rng = np.random.default_rng(1)
+    x, y = rng.uniform(0, 300, 20), rng.uniform(0, 200, 20)
+    ang = rng.uniform(0, 2 * math.pi, 20)
+    _, _, a = PP.map_points(H, x, y, ang)
+    tx, ty = -np.sin(ang), np.cos(ang)           # along the edge
+    e = 1e-4
+    u0, v0, _ = PP.apply_homography(H, x, y)
+    u1, v1, _ = PP.apply_homography(H, x + e * tx, y + e * ty)
+    dot = (u1 - u0) * np.cos(a) + (v1 - v0) * np.sin(a)
+    assert np.abs(dot).max() < 1e-9
+    # ... and on the side the gradient pointed to
+    u2, v2, _ = PP.apply_homography(H, x + e * np.cos(ang), y + e * np.sin(ang))
+    assert np.all((u2 - u0) * np.cos(a) + (v2 - v0) * np.sin(a) > 0)
 
 
 def test_similarity_of_a_homography_is_its_least_squares_fit():
@@ -215,6 +260,50 @@ def test_an_oblique_pool_pair_is_measured_as_a_homography(pool_pair, monkeypatch
     # without the check, the pair is declined
     monkeypatch.setattr(PAIR, "check_perspective", lambda *a, **k: None)
     assert seahough.estimate_motion(a, b) is None
+
+
+def _pool_search(a, b):
+    from seahough.config import MOTION_CONFIG
+    from seahough.core.detector import Detector
+    ga, gb = seahough.to_gray(a), seahough.to_gray(b)
+    p = seahough.Pattern.from_frame(ga, config=MOTION_CONFIG)
+    h, w = gb.shape
+    ox, oy = p.origin
+    region = (ox - 0.5 * w, oy - 0.5 * h, ox + 0.5 * w, oy + 0.5 * h)
+    det = Detector(p, (0.8, 1.25), (-30, 30), config=MOTION_CONFIG, max_results=1,
+                   min_score=0.15, min_confidence=0.0, max_nfa=math.inf, search_region=region)
+    return p, det.search(gb), region, MOTION_CONFIG
+
+
+def test_the_check_confirms_the_vote_never_replaces_it(pool_pair, monkeypatch):
+    a, b, want = pool_pair
+    p, res, region, cfg = _pool_search(a, b)
+    d = res.detections[0]
+    check = PP.check_perspective(p, res, d, region, (0.8, 1.25), (-30, 30), cfg)
+    assert check is not None and _corner_error(check.matrix, want, a.shape) < 0.01 * math.hypot(
+        *a.shape[:2])
+    # a known scale or rotation: a homography would free it, no check
+    assert PP.check_perspective(p, res, d, region, (1.0, 1.0), (-30, 30), cfg) is None
+    assert PP.check_perspective(p, res, d, region, (0.8, 1.25), (0.0, 0.0), cfg) is None
+    # when another candidate's homography fits better than the vote's answer's,
+    # the check does not put it in its place
+    real = PP.homography_icp
+    fx, fy = res.features.gradients.fx, res.features.gradients.fy
+    own = PP.work_matrix(d.matrix, fx, fy)
+    c = np.array([[0, 0, 1], [319, 0, 1], [319, 179, 1], [0, 179, 1]], float)
+
+    def corners(m):
+        q = c @ np.asarray(m, float).T
+        return q[:, :2] / q[:, 2:]
+
+    def worse_for_the_answer(H0, *args, **kw):
+        H, score, inside = real(H0, *args, **kw)
+        if np.hypot(*(corners(H) - corners(own)).T).max() < 6.0:   # the vote's answer
+            return H, 0.2 * score, inside
+        return H, score, inside
+
+    monkeypatch.setattr(PP, "homography_icp", worse_for_the_answer)
+    assert PP.check_perspective(p, res, d, region, (0.8, 1.25), (-30, 30), cfg) is None
 
 
 def test_a_confident_similarity_is_not_refitted(monkeypatch):

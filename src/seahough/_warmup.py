@@ -68,7 +68,7 @@ def cache_stats() -> dict[str, tuple[int, int]]:
     dict
         ``{"edges.edge_points": (loaded, compiled), ...}``; a kernel not yet
         called has ``(0, 0)``. A kernel called only from other kernels
-        (``matching._solve4``) is compiled with its callers and never
+        (``matching._solve``) is compiled with its callers and never
         counted.
     """
     return {name: (sum(k.stats.cache_hits.values()), sum(k.stats.cache_misses.values()))
@@ -136,6 +136,15 @@ def warm_up() -> dict[str, tuple[int, int]]:
     frames, _ = sim.sequence(n_frames=4, frame_size=(300, 400), seed=3, source="procedural")
     estimate_motion(frames[0], frames[1])
     estimate_motion(frames[0], frames[1], scale_range=(1, 1), angle_range=(0, 0))
+    # the homography refit of a pair whose vote is not distinct (a tiled floor)
+    import math
+
+    from .core.keypoints import find_edge_points
+    from .core.preprocess import compute_gradients
+    from .motion.parallax import strongest
+    from .motion.perspective import homography_icp
+    edges = find_edge_points(compute_gradients(scene.astype(np.float32)), 20)
+    homography_icp(np.eye(3), strongest(edges), edges, edges.index_map(), math.radians(20))
     # a short dead-reckoning run (keyframes, priors, the fallbacks, the mosaic)
     with tempfile.TemporaryDirectory() as out:
         try:

@@ -210,6 +210,25 @@ def nearest_similarity(matrix) -> np.ndarray:
     return Similarity.from_matrix(matrix).matrix
 
 
+def fit_similarity(p, q) -> np.ndarray:
+    """The similarity (2x3, no reflection) that brings the points ``p`` onto
+    ``q`` (N x 2 each) best in the least-squares sense.
+
+    >>> m = pose_to_matrix(5.0, -2.0, 1.5, 30.0)
+    >>> p = np.array([[0.0, 0.0], [10.0, 0.0], [3.0, 7.0]])
+    >>> bool(np.allclose(fit_similarity(p, apply_matrix(m, p)), m))
+    True
+    """
+    p, q = np.asarray(p, np.float64), np.asarray(q, np.float64)
+    mp, mq = p.mean(0), q.mean(0)
+    a, b = p - mp, q - mq
+    s_xx = (a ** 2).sum()
+    c = (a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1]).sum() / s_xx
+    s = (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum() / s_xx
+    r = np.array([[c, -s], [s, c]])
+    return np.hstack([r, (mq - r @ mp)[:, None]])
+
+
 def shift_origin(matrix, ox: float, oy: float) -> np.ndarray:
     """A 2x3 matrix seen in coordinates whose origin is at ``(ox, oy)``:
     ``T(-o) M T(o)`` (e.g. a motion measured on crops that start at ``o``

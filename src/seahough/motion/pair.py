@@ -64,9 +64,11 @@ class Motion:
         find by chance; the smaller, the stronger the evidence (NaN: not
         known).
     parallax : float
-        How far parts of the frame stray from the similarity (median, in
-        pixels): the seabed's relief seen from two places, or a camera that
-        looks obliquely (NaN: not measured).
+        How far parts of the frame stray from the similarity (pixels): the
+        seabed's relief seen from two places, or a camera that looks
+        obliquely (NaN: not measured). Measured tile by tile, the median
+        distance of the tiles' shifts; refitted as a homography, the RMS
+        distance of the homography from the similarity over the frame.
     homography : ndarray (3, 3) or None
         Previous-frame pixel -> current-frame pixel as a homography fitted
         to the parts of the frame (a plane seen from two places; None: not
@@ -77,7 +79,11 @@ class Motion:
     relief), ``confidence``, ``score`` and ``nfa`` are those of that
     measurement, with each part of the frame allowed a small shift of its
     own, and ``parallax`` is how far the parts stray from the similarity
-    fitted to them.
+    fitted to them. When the vote hardly preferred its answer (a tiled
+    floor, a camera that looks ahead) and the answer was confirmed as a
+    homography (:mod:`seahough.motion.perspective`), they are those of the
+    homography, the matrix is the similarity that fits it best over the
+    frame, and ``homography`` is it.
     """
 
     matrix: np.ndarray
@@ -325,8 +331,8 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
     # refitted as homographies may confirm the vote's answer
     if not perspective:
         return own
-    persp = check_perspective(pattern, res, region, scale_range, angle_range, config, gray=gray,
-                              frame=frame)
+    persp = check_perspective(pattern, res, d, region, scale_range, angle_range, config,
+                              gray=gray, frame=frame)
     if persp is not None and persp.confidence >= min_confidence and persp.score >= min_score:
         return PairMeasure(persp.matrix, persp.confidence, persp.score, persp.nfa,
                            persp.parallax, persp.homography)

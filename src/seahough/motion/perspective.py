@@ -11,30 +11,36 @@ in 10). Over a tiled floor it is worse: a shift by a tile or two matches
 almost as well as the true motion, so the vote hardly prefers the true
 peak to its neighbours.
 
-So the vote's best candidate poses are refined as homographies: the
+So the vote's best candidate poses are refitted as homographies: the
 previous frame's strongest edge points are matched to the current frame's
 edges (same direction, mapped by the homography's local Jacobian), and the
 homography that brings them onto their edges is fitted (point-to-edge
 distances, Gauss-Newton with Huber weights, shrinking match radii). The
-true motion then explains most of the frame's edges; a tile-shifted
-look-alike only its repeated texture, not the chain, bricks and stains on
-the floor nor the parts that enter and leave the view. The evidence is:
+true motion then explains most of the frame's edges in view, where a
+similarity explained a band. The evidence is:
 
-- ``score``: the share of the previous frame's edge points found again
-  within the match radius (of all of them, as :mod:`.parallax` counts);
+- ``agreement``: the share of the previous frame's edge points *in view*
+  found again within the match radius (ranks the candidates: a look-alike
+  that moves less keeps more of the frame in view, and on a tiled floor
+  matched a larger share of *all* the points than the true motion);
+- ``score``: the share of all of them found again (as :mod:`.parallax`
+  counts; the caller's ``min_score`` judges it);
 - ``nfa``: the a-contrario number of false alarms of that agreement
   (:mod:`seahough.core.nfa`), the search's poses times the freedom the
   homography adds (:data:`EXTRA_DOF` parameters, each moving the frame's
   corners over :data:`RADII` ``[0]`` working pixels either way, one
   value a pixel);
-- ``confidence``: as the search's, against the best of the other
-  candidates (refined the same way) that end more than ``SAME`` working
-  pixels away at the frame's corners.
+- ``confidence``: the agreement against the best of the other candidates
+  that end more than ``SAME`` working pixels away at the frame's corners
+  (the :data:`FULL` best refitted to the end, the others at the large radii
+  only: their agreement, and so the runner-up, may be a little low).
 
-The motion reported is the similarity that fits the homography best over
-the part of the frame still in view (least squares on a grid: what a
-trajectory needs, and how the benchmark's truth is defined), with the
-homography itself beside it.
+The check confirms the vote's own answer or nothing: over a tiled floor the
+true motion is not always among the candidates, and then a look-alike a
+tile or two off fits best. The motion reported is the similarity that fits
+the homography best over the part of the frame still in view (least squares
+on a grid: what a trajectory needs, and how the benchmark's truth is
+defined), with the homography itself beside it.
 """
 
 from __future__ import annotations
@@ -48,6 +54,7 @@ from ..core.keypoints import find_edge_points
 from ..core.nfa import MIN_LOG10_NFA, background, evidence, log10_tests
 from ..core.preprocess import compute_gradients
 from ..core.refine import Pose
+from ..geometry import fit_similarity
 from .parallax import (SAME, LocalCheck, _candidate_matrix, frame_points, full_matrix,
                        work_matrix)
 
@@ -57,7 +64,7 @@ __all__ = ["CANDIDATES", "RADII", "homography_icp", "similarity_of", "check_pers
 CANDIDATES = 5
 #: Candidates fitted to the end (the others: at the two largest radii only).
 FULL = 2
-#: Match radii of the homography fit, working pixels (4 iterations at each).
+#: Match radii of the homography fit, working pixels (ITERATIONS at each).
 RADII = (6.0, 4.0, 2.5, 1.5)
 #: Every how many points are matched while the radius exceeds 2 px.
 STRIDE = 2
@@ -67,8 +74,13 @@ ITERATIONS = 5
 FINE = 2.0
 #: ... its match radii (pixels of that scale) ...
 FINE_RADII = (3.0, 2.0, 1.5)
-#: ... and the most edge points it fits (the strongest).
+#: ... the most edge points it fits (the strongest) ...
 FINE_POINTS = 4000
+#: ... and how far it may move the frame's corners (working pixels of the search).
+FINISH_MOVE = 2.0
+#: A candidate is ranked when its homography keeps at least this share of the
+#: previous frame's points in view.
+MIN_IN_VIEW = 0.25
 #: Parameters a homography has beyond a similarity (shear, aspect, perspective).
 EXTRA_DOF = 4
 
@@ -105,13 +117,15 @@ def homography_icp(H0, points, edges, index, tol: float, radii=RADII,
                    stride: int = STRIDE):
     """Fit a homography to the edge ``points`` (x, y, gradient angle) of one
     frame among the ``edges`` of another (``index``: their index map),
-    starting from ``H0`` (3x3, or a 2x3 similarity). Returns ``(H, score)``:
-    the 3x3 homography (``H[2, 2] = 1``) and the share of the points with a
-    matching edge within ``score_radius`` at it. Each step matches every
+    starting from ``H0`` (3x3, or a 2x3 similarity). Returns ``(H, score,
+    inside)``: the 3x3 homography (``H[2, 2] = 1``), the share of the points
+    with a matching edge within ``score_radius`` at it, and the share it maps
+    inside the image. Each step matches every
     point (every ``stride``-th while the radius exceeds 2 px) to the nearest
     edge point of compatible direction within the radius and solves the
     weighted least squares of the point-to-edge distances (along the edge's
-    normal; Huber weights) for the 8 parameters
+    normal; Huber weights beyond half the radius, at least 1 px) for the 8
+    parameters
     (:func:`seahough.core.kernels.homography_icp`).
 
     Examples
@@ -131,19 +145,20 @@ def homography_icp(H0, points, edges, index, tol: float, radii=RADII,
     >>> prev = find_edge_points(compute_gradients(img), 20)
     >>> cur = find_edge_points(compute_gradients(seen), 20)
     >>> pts = prev.x.astype(float), prev.y.astype(float), prev.angle.astype(float)
-    >>> fit, score = homography_icp(np.eye(3), pts, cur, cur.index_map(), math.radians(20))
-    >>> score > 0.9, bool(np.abs(fit - H).max() < 0.01)
-    (True, True)
+    >>> fit, score, inside = homography_icp(np.eye(3), pts, cur, cur.index_map(),
+    ...                                     math.radians(20))
+    >>> score > 0.9, inside > 0.95, bool(np.abs(fit - H).max() < 0.01)
+    (True, True, True)
     """
     H = np.asarray(H0, np.float64)
     if H.shape == (2, 3):
         H = np.vstack([H, [0.0, 0.0, 1.0]])
     px, py, pa = (np.ascontiguousarray(v, np.float64) for v in points)
-    out, score = K.homography_icp(px, py, pa, np.ascontiguousarray(H), edges.x, edges.y,
-                                  edges.angle, edges.nx, edges.ny, index,
-                                  np.asarray(radii, np.float64), int(iterations), float(tol),
-                                  int(stride), float(score_radius))
-    return out, float(score)
+    out, score, inside = K.homography_icp(px, py, pa, np.ascontiguousarray(H), edges.x,
+                                          edges.y, edges.angle, edges.nx, edges.ny, index,
+                                          np.asarray(radii, np.float64), int(iterations),
+                                          float(tol), int(stride), float(score_radius))
+    return out, float(score), float(inside)
 
 
 def similarity_of(H, shape, step: int = 8):
@@ -166,37 +181,40 @@ def similarity_of(H, shape, step: int = 8):
         return None
     p = np.stack([u[inside], v[inside]], 1)
     q = np.stack([qu[inside], qv[inside]], 1)
-    mp, mq = p.mean(0), q.mean(0)
-    a, b = p - mp, q - mq
-    sxx = (a ** 2).sum()
-    c = (a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1]).sum() / sxx
-    s = (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum() / sxx
-    R = np.array([[c, -s], [s, c]])
-    S = np.hstack([R, (mq - R @ mp)[:, None]])
-    res = q - (p @ R.T + S[:, 2])
+    S = fit_similarity(p, q)
+    res = q - (p @ S[:, :2].T + S[:, 2])
     return S, float(np.sqrt((res ** 2).sum(1).mean()))
 
 
-def check_perspective(pattern, result, region, scale_range, angle_range, config,
+def check_perspective(pattern, result, detection, region, scale_range, angle_range, config,
                       candidates: int = CANDIDATES, gray=None, frame=None
                       ) -> LocalCheck | None:
-    """Choose a frame pair's motion among the search's best candidates by
-    their evidence as homographies (the module's docstring).
+    """Confirm a frame pair's motion by the search's best candidates'
+    evidence as homographies (the module's docstring).
 
     ``pattern`` is the previous frame (:meth:`~seahough.Pattern.from_frame`),
     ``result`` the :class:`~seahough.core.detector.SearchResult` of its
-    search in the current frame within ``region`` and the ranges. Returns a
+    search in the current frame within ``region`` and the ranges,
+    ``detection`` its best detection (None: its best candidate stands in):
+    the vote's answer. Each candidate is ranked by the share of its points
+    in view that it matches (a look-alike that moves less keeps more of the
+    frame in view, and would win on the share of all the points), among
+    those that keep at least :data:`MIN_IN_VIEW` of them in view. Returns a
     :class:`~.parallax.LocalCheck` (its ``matrix`` the similarity that fits
     the homography over the frame, its ``parallax`` the RMS distance of the
-    homography from it, full-resolution pixels; its ``distinct`` is not
-    measured), or None when the search left no candidate, none could be
-    fitted, or the best homography is not the vote's own best candidate. ``gray``: the current frame
-    (grey, full resolution), for the homography's finish at
-    :data:`FINE` times the working scale; ``frame``: the previous frame's
-    :func:`~.parallax.frame_points` at the working scale, when already made.
+    homography from it, full-resolution pixels; its ``score`` the share of
+    all the points matched; its ``distinct`` not measured), or None when the
+    search left no candidate, none could be fitted, the best is not the
+    vote's answer, or the scale or rotation is known (a homography would
+    free it). ``gray``: the current frame (grey, full resolution), for the
+    homography's finish at :data:`FINE` times the working scale; ``frame``:
+    the previous frame's :func:`~.parallax.frame_points` at the working
+    scale, when already made.
     """
     feats = result.features
     if feats is None or not result.candidates:
+        return None
+    if scale_range[0] == scale_range[1] or angle_range[0] == angle_range[1]:
         return None
     fx, fy, factor = feats.gradients.fx, feats.gradients.fy, result.factor
     tol = math.radians(config.angle_tolerance)
@@ -206,32 +224,46 @@ def check_perspective(pattern, result, region, scale_range, angle_range, config,
     owx, owy = (ox + 0.5) * fx - 0.5, (oy + 0.5) * fy - 0.5
     ph, pw = grad.magnitude.shape
     corners = np.array([[0, 0, 1], [pw - 1, 0, 1], [pw - 1, ph - 1, 1], [0, ph - 1, 1]], float)
+
+    def at(m):
+        q = corners @ m.T
+        return q[:, :2] / q[:, 2:] if np.all(q[:, 2] > 0) else None
+
+    def gap(a, b):
+        return float(np.hypot(*(a - b).T).max())
+
     cands = sorted(result.candidates, key=lambda c: -c.work_score)[:candidates]
+    starts = [_candidate_matrix(c.fit.pose, owx, owy) for c in cands]
+    # the vote's answer: the candidate nearest the detection (the ranking may
+    # finish another candidate than the best at the working scale)
+    own = 0
+    if detection is not None:
+        d_at = at(np.vstack([work_matrix(detection.matrix, fx, fy)[:2], [0, 0, 1]]))
+        own = int(np.argmin([gap(at(np.vstack([m, [0, 0, 1]])), d_at) for m in starts]))
     # every candidate fitted at the large radii on a subset of the points,
-    # the best FULL of them to the end; (score, H, candidate's rank)
+    # the best FULL of them to the end
     fits = []
-    for rank, c in enumerate(cands):
-        H, score = homography_icp(_candidate_matrix(c.fit.pose, owx, owy), points, feats.edges,
-                                  feats.index, tol, radii=RADII[:2], iterations=3,
-                                  score_radius=radius, stride=2 * STRIDE)
-        fits.append((score, H, rank))
+    for k, m in enumerate(starts):
+        H, score, inside = homography_icp(m, points, feats.edges, feats.index, tol,
+                                          radii=RADII[:2], iterations=3, score_radius=radius,
+                                          stride=2 * STRIDE)
+        fits.append([score / max(inside, 1e-9), score, inside, H, k])
+    fits.sort(key=lambda f: -f[0] if f[2] >= MIN_IN_VIEW else 1.0)
+    for f in fits[:FULL]:
+        H, score, inside = homography_icp(f[3], points, feats.edges, feats.index, tol,
+                                          radii=RADII[1:], score_radius=radius)
+        f[:4] = [score / max(inside, 1e-9), score, inside, H]
+    fits = [f + [at(f[3])] for f in fits if f[2] >= MIN_IN_VIEW and f[1] > 0]
+    fits = [f for f in fits if f[5] is not None]
     fits.sort(key=lambda f: -f[0])
-    for k in range(min(FULL, len(fits))):
-        H, score = homography_icp(fits[k][1], points, feats.edges, feats.index, tol,
-                                  radii=RADII[1:], score_radius=radius)
-        fits[k] = (score, H, fits[k][2])
-    fits = [(s, H, at[:, :2] / at[:, 2:], rank) for s, H, rank in fits
-            for at in [corners @ H.T] if s > 0 and np.all(at[:, 2] > 0)]
-    fits.sort(key=lambda f: -f[0])
-    if not fits or fits[0][3] != 0:
+    if not fits or fits[0][4] != own:
         # the check confirms the vote's own answer, never puts another in its
         # place: over a tiled floor the true motion is not always among the
         # candidates, and then a look-alike a tile or two off fits best
         return None
-    score, H, at, _ = fits[0]
-    runner = max((s for s, _, a, _ in fits[1:] if float(np.hypot(*(a - at).T).max()) > SAME),
-                 default=0.0)
-    conf = float(np.clip((score - runner) / max(1.0 - runner, 1e-9), 0.0, 1.0))
+    agree, score, _, H, _, c_at = fits[0]
+    runner = max((f[0] for f in fits[1:] if gap(f[5], c_at) > SAME), default=0.0)
+    conf = float(np.clip((agree - runner) / max(1.0 - runner, 1e-9), 0.0, 1.0))
     # the evidence: the points mapped by the homography, at the identity pose
     px, py, pa = points
     u, v, a = map_points(H, px, py, pa)
@@ -246,7 +278,8 @@ def check_perspective(pattern, result, region, scale_range, angle_range, config,
     Hf = full_matrix(H, fx, fy)
     Hf = Hf / Hf[2, 2]
     if gray is not None and FINE > 1 and factor < 1:
-        Hf = _finish(Hf, pattern, gray, min(1.0, FINE * factor), config, tol)
+        Hf = _finish(Hf, pattern, gray, min(1.0, FINE * factor), config, tol,
+                     max_move=FINISH_MOVE / factor)
     sim = similarity_of(Hf, feats.gradients.full_shape)
     if sim is None:
         return None
@@ -254,17 +287,26 @@ def check_perspective(pattern, result, region, scale_range, angle_range, config,
     return LocalCheck(S, conf, score, float(10.0 ** max(ev.log10_nfa, MIN_LOG10_NFA)), rms, Hf)
 
 
-def _finish(Hf, pattern, gray, factor, config, tol):
+def _finish(Hf, pattern, gray, factor, config, tol, max_move):
     """The full-resolution homography ``Hf`` refined at working scale
-    ``factor`` (both frames' edges at that scale; radii 3, 2 and 1.5 px);
-    ``Hf`` itself when the fit fails."""
+    ``factor`` (both frames' edges at that scale; :data:`FINE_RADII`); ``Hf``
+    itself when the fit fails, matches fewer points in view, or moves the
+    frame's corners more than ``max_move`` full-resolution pixels."""
     _, pts = frame_points(pattern, factor, config, FINE_POINTS)
     grad = compute_gradients(gray, factor, config.equalize)
     edges = find_edge_points(grad, config.min_gradient)
     fx, fy = grad.fx, grad.fy
-    H, score = homography_icp(work_matrix(Hf, fx, fy), pts, edges, edges.index_map(), tol,
-                              radii=FINE_RADII)
-    if score <= 0:
-        return Hf
+    start = work_matrix(Hf, fx, fy)
+    index = edges.index_map()
+    _, s0, i0 = homography_icp(start, pts, edges, index, tol, radii=FINE_RADII[-1:],
+                               iterations=0)
+    H, score, inside = homography_icp(start, pts, edges, index, tol, radii=FINE_RADII)
     out = full_matrix(H, fx, fy)
-    return out / out[2, 2]
+    out = out / out[2, 2]
+    h, w = gray.shape[:2]
+    c = np.array([[0, 0, 1], [w - 1, 0, 1], [w - 1, h - 1, 1], [0, h - 1, 1]], float)
+    a, b = c @ out.T, c @ Hf.T
+    if (score <= 0 or score / max(inside, 1e-9) < s0 / max(i0, 1e-9) or np.any(a[:, 2] <= 0)
+            or np.hypot(*(a[:, :2] / a[:, 2:] - b[:, :2] / b[:, 2:]).T).max() > max_move):
+        return Hf
+    return out

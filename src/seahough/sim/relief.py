@@ -35,6 +35,7 @@ import cv2
 import numpy as np
 
 from ..errors import ParameterError
+from ..geometry import fit_similarity
 from ._util import ImageLike, Shape, _check_shape, _seed_of
 from ._views import _as_photo
 from .backgrounds import _source_photo, tiled_floor
@@ -149,20 +150,9 @@ class ReliefTruth:
         p, q = self.flow(i, j)
         if len(p) < 10:
             raise ParameterError(f"frames {i} and {j} do not overlap")
-        M = _fit_similarity(p, q)
+        M = fit_similarity(p, q)
         r = q - (p @ M[:, :2].T + M[:, 2])
         return M, float(np.sqrt((r ** 2).sum(1).mean()))
-
-
-def _fit_similarity(p: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """Least-squares similarity p -> q (Umeyama, no reflection)."""
-    mp, mq = p.mean(0), q.mean(0)
-    a, b = p - mp, q - mq
-    s_xx = (a ** 2).sum()
-    c = (a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1]).sum() / s_xx
-    s = (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]).sum() / s_xx
-    R = np.array([[c, -s], [s, c]])
-    return np.hstack([R, (mq - R @ mp)[:, None]])
 
 
 def _height_field(rng, extent, cell, relief, corr):

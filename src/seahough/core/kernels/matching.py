@@ -174,17 +174,18 @@ def _solve_pose(px, py, ex, ey, enx, eny, w, m, a, b, fix, along):
         return out
     for r in range(4):
         ata[r, r] += 1e-9
-    if not _solve4(ata, atb, out):
+    if not _solve(ata, atb, out):
         out[0] = np.nan
     return out
 
 
 @njit(cache=CACHE, nogil=True)
-def _solve4(m, v, out):
-    """Solve the 4x4 system ``m x = v`` into ``out`` by Gaussian elimination
-    with partial pivoting (Numba's np.linalg would need SciPy). Returns False
-    when the system is singular. ``m`` and ``v`` are overwritten."""
-    n = 4
+def _solve(m, v, out):
+    """Solve the small square system ``m x = v`` into ``out`` by Gaussian
+    elimination with partial pivoting (Numba's np.linalg would need SciPy).
+    Returns False when the system is singular. ``m`` and ``v`` are
+    overwritten."""
+    n = v.shape[0]
     for c in range(n):
         p = c
         for r in range(c + 1, n):
@@ -435,38 +436,6 @@ def evidence_counts(px, py, pang, a, b, tx, ty, ids, cover, ox, oy, cell, h, w, 
 
 
 @njit(cache=CACHE, nogil=True)
-def _solve_spd(m, v):
-    """Solve ``m x = v`` (a small symmetric positive system) by Gaussian
-    elimination with partial pivoting; NaNs when singular."""
-    n = v.shape[0]
-    a = m.copy()
-    b = v.copy()
-    for c in range(n):
-        p = c
-        for r in range(c + 1, n):
-            if abs(a[r, c]) > abs(a[p, c]):
-                p = r
-        if abs(a[p, c]) < 1e-300:
-            return np.full(n, np.nan)
-        if p != c:
-            for k in range(n):
-                a[c, k], a[p, k] = a[p, k], a[c, k]
-            b[c], b[p] = b[p], b[c]
-        for r in range(c + 1, n):
-            f = a[r, c] / a[c, c]
-            for k in range(c, n):
-                a[r, k] -= f * a[c, k]
-            b[r] -= f * b[c]
-    out = np.empty(n)
-    for r in range(n - 1, -1, -1):
-        acc = b[r]
-        for k in range(r + 1, n):
-            acc -= a[r, k] * out[k]
-        out[r] = acc / a[r, r]
-    return out
-
-
-@njit(cache=CACHE, nogil=True)
 def homography_icp(px, py, pang, hom, ex, ey, eang, enx, eny, index, radii, iterations,
                    ang_tol, stride, score_radius):
     """Refine a homography (3x3 ``hom``: point (x, y) -> image pixel) of the
@@ -480,12 +449,14 @@ def homography_icp(px, py, pang, hom, ex, ey, eang, enx, eny, index, radii, iter
     solves the weighted least squares of the point-to-edge distances along
     the edge normals (Huber weights, half the radius) for the homography's
     8 parameters, in coordinates normalised to the points' spread. Returns
-    ``(hom, score)``: the refined homography (``hom[2, 2] = 1``) and the
-    share of the points with a compatible edge within ``score_radius``.
+    ``(hom, score, inside)``: the refined homography (``hom[2, 2] = 1``),
+    the share of the points with a compatible edge within ``score_radius``,
+    and the share that it maps inside the image.
     """
     n = px.shape[0]
     if n == 0:
-        return hom.copy(), 0.0
+        return hom.copy(), 0.0, 0.0
+    ih, iw = index.shape
     cx = px.mean()
     cy = py.mean()
     sc = max(math.sqrt(((px - cx) ** 2).mean()), math.sqrt(((py - cy) ** 2).mean()), 1.0)
@@ -499,6 +470,7 @@ def homography_icp(px, py, pang, hom, ex, ey, eang, enx, eny, index, radii, iter
     A = np.empty((8, 8))
     g = np.empty(8)
     jr = np.empty(8)
+    dh = np.empty(8)
     for ri in range(radii.shape[0]):
         rad = radii[ri]
         step = stride if rad > 2.0 else 1
@@ -555,15 +527,14 @@ def homography_icp(px, py, pang, hom, ex, ey, eang, enx, eny, index, radii, iter
                     A[k, l] = A[l, k]
             for k in range(8):
                 A[k, k] += 1e-6 * tr / 8.0
-            dh = _solve_spd(A, g)
-            if np.isnan(dh[0]):
+            if not _solve(A, g, dh):
                 break
             moved = 0.0
             for k in range(8):
                 hn[k // 3, k % 3] += dh[k]
                 moved = max(moved, abs(dh[k]))
             if not np.all(np.isfinite(hn)) or abs(hn[2, 2]) < 1e-12:
-                return hom.copy(), 0.0
+                return hom.copy(), 0.0, 0.0
             hn /= hn[2, 2]
             if moved < 0.02:   # (pixels, about: the parameters move points by that)
                 break
@@ -575,16 +546,19 @@ def homography_icp(px, py, pang, hom, ex, ey, eang, enx, eny, index, radii, iter
         out[r, 2] = hn[r, 2] - (hn[r, 0] * cx + hn[r, 1] * cy) / sc
     out /= out[2, 2]
     matched = 0
+    inside = 0
     for i in range(n):
-        w = out[2, 0] * px[i] + out[2, 1] * py[i] + out[2, 2]
-        if w <= 1e-9:
+        ww = out[2, 0] * px[i] + out[2, 1] * py[i] + out[2, 2]
+        if ww <= 1e-9:
             continue
-        u = (out[0, 0] * px[i] + out[0, 1] * py[i] + out[0, 2]) / w
-        v = (out[1, 0] * px[i] + out[1, 1] * py[i] + out[1, 2]) / w
-        j11 = (out[0, 0] - u * out[2, 0]) / w
-        j12 = (out[0, 1] - u * out[2, 1]) / w
-        j21 = (out[1, 0] - v * out[2, 0]) / w
-        j22 = (out[1, 1] - v * out[2, 1]) / w
+        u = (out[0, 0] * px[i] + out[0, 1] * py[i] + out[0, 2]) / ww
+        v = (out[1, 0] * px[i] + out[1, 1] * py[i] + out[1, 2]) / ww
+        if u >= 0 and v >= 0 and u <= iw - 1 and v <= ih - 1:
+            inside += 1
+        j11 = (out[0, 0] - u * out[2, 0]) / ww
+        j12 = (out[0, 1] - u * out[2, 1]) / ww
+        j21 = (out[1, 0] - v * out[2, 0]) / ww
+        j22 = (out[1, 1] - v * out[2, 1]) / ww
         ca = math.cos(pang[i])
         sa = math.sin(pang[i])
         sg = 1.0 if j11 * j22 - j12 * j21 >= 0 else -1.0
@@ -593,4 +567,4 @@ def homography_icp(px, py, pang, hom, ex, ey, eang, enx, eny, index, radii, iter
         j, _ = _nearest(u, v, want, ex, ey, eang, index, score_radius, ang_tol, False)
         if j >= 0:
             matched += 1
-    return out, matched / n
+    return out, matched / n, inside / n
