@@ -435,6 +435,24 @@ def evidence_counts(px, py, pang, a, b, tx, ty, ids, cover, ox, oy, cell, h, w, 
     return n_eff, m_eff, k_eff, psum / cnt if cnt > 0 else 0.0
 
 
+@njit(cache=CACHE, nogil=True, inline="always")
+def _map_point(hom, x, y, w, ang):
+    """Point (x, y) mapped by the homography ``hom`` (``w``: its divisor
+    there, > 0), and the gradient direction ``ang`` turned by the inverse
+    transpose of its Jacobian, in [0, 2 pi): ``(u, v, direction)``."""
+    u = (hom[0, 0] * x + hom[0, 1] * y + hom[0, 2]) / w
+    v = (hom[1, 0] * x + hom[1, 1] * y + hom[1, 2]) / w
+    j11 = (hom[0, 0] - u * hom[2, 0]) / w
+    j12 = (hom[0, 1] - u * hom[2, 1]) / w
+    j21 = (hom[1, 0] - v * hom[2, 0]) / w
+    j22 = (hom[1, 1] - v * hom[2, 1]) / w
+    ca = math.cos(ang)
+    sa = math.sin(ang)
+    sg = 1.0 if j11 * j22 - j12 * j21 >= 0 else -1.0
+    d = math.atan2(sg * (-j12 * ca + j11 * sa), sg * (j22 * ca - j21 * sa))
+    return u, v, d - TWO_PI * math.floor(d / TWO_PI)
+
+
 @njit(cache=CACHE, nogil=True)
 def homography_icp(px, py, pang, hom, ex, ey, eang, enx, eny, index, radii, iterations,
                    ang_tol, stride, score_radius):
@@ -485,18 +503,7 @@ def homography_icp(px, py, pang, hom, ex, ey, eang, enx, eny, index, radii, iter
                 w = hn[2, 0] * x + hn[2, 1] * y + hn[2, 2]
                 if w <= 1e-9:
                     continue
-                u = (hn[0, 0] * x + hn[0, 1] * y + hn[0, 2]) / w
-                v = (hn[1, 0] * x + hn[1, 1] * y + hn[1, 2]) / w
-                j11 = (hn[0, 0] - u * hn[2, 0]) / w
-                j12 = (hn[0, 1] - u * hn[2, 1]) / w
-                j21 = (hn[1, 0] - v * hn[2, 0]) / w
-                j22 = (hn[1, 1] - v * hn[2, 1]) / w
-                ca = math.cos(pang[i])
-                sa = math.sin(pang[i])
-                det = j11 * j22 - j12 * j21
-                sg = 1.0 if det >= 0 else -1.0
-                want = math.atan2(sg * (-j12 * ca + j11 * sa), sg * (j22 * ca - j21 * sa))
-                want -= TWO_PI * math.floor(want / TWO_PI)
+                u, v, want = _map_point(hn, x, y, w, pang[i])
                 j, _ = _nearest(u, v, want, ex, ey, eang, index, rad, ang_tol, False)
                 if j < 0:
                     continue
@@ -551,19 +558,9 @@ def homography_icp(px, py, pang, hom, ex, ey, eang, enx, eny, index, radii, iter
         ww = out[2, 0] * px[i] + out[2, 1] * py[i] + out[2, 2]
         if ww <= 1e-9:
             continue
-        u = (out[0, 0] * px[i] + out[0, 1] * py[i] + out[0, 2]) / ww
-        v = (out[1, 0] * px[i] + out[1, 1] * py[i] + out[1, 2]) / ww
+        u, v, want = _map_point(out, px[i], py[i], ww, pang[i])
         if u >= 0 and v >= 0 and u <= iw - 1 and v <= ih - 1:
             inside += 1
-        j11 = (out[0, 0] - u * out[2, 0]) / ww
-        j12 = (out[0, 1] - u * out[2, 1]) / ww
-        j21 = (out[1, 0] - v * out[2, 0]) / ww
-        j22 = (out[1, 1] - v * out[2, 1]) / ww
-        ca = math.cos(pang[i])
-        sa = math.sin(pang[i])
-        sg = 1.0 if j11 * j22 - j12 * j21 >= 0 else -1.0
-        want = math.atan2(sg * (-j12 * ca + j11 * sa), sg * (j22 * ca - j21 * sa))
-        want -= TWO_PI * math.floor(want / TWO_PI)
         j, _ = _nearest(u, v, want, ex, ey, eang, index, score_radius, ang_tol, False)
         if j >= 0:
             matched += 1
