@@ -40,7 +40,7 @@ homography check switched off ("similarity only": as before the check).
 
     python bench/bench_oblique.py --write   # docs/oblique.md (~4 min)
     python bench/bench_oblique.py --quick   # 2 sequences at 640x360 (~15 s)
-    python bench/bench_oblique.py --part tune --out /tmp/oblique.md
+    python bench/bench_oblique.py --part tune --out oblique_tune.md   # (a page outside docs/)
 """
 
 from __future__ import annotations
