@@ -36,7 +36,9 @@ Split: tune part = the tiled floors of seeds 0-5 and dtu_seabed_pair/scene1.png
 aqualoc_amphorae_wreck/frame_040.png and dtu_seabed_pair/scene2.png (seeds
 0-1). Methods and timing as bench_real_pairs.py (CPU time, single thread;
 seahough ``estimate_motion`` at its defaults), and seahough with its
-homography check switched off ("similarity only": as before the check).
+homography checks switched off ("similarity only": as before them; the
+vote's candidates refitted as homographies, motion/perspective.py, and the
+pair measured coarse to fine, motion/pyramid.py).
 
     python bench/bench_oblique.py --write   # docs/oblique.md (~4 min)
     python bench/bench_oblique.py --quick   # 2 sequences at 640x360 (~15 s)
@@ -81,14 +83,15 @@ BEFORE = "seahough, similarity only"
 
 
 def _similarity_only(a, b):
-    """seahough as it was before the homography check (motion/perspective.py):
-    the check switched off, for the comparison in the same run."""
-    real = P.check_perspective
-    P.check_perspective = lambda *args, **kw: None
+    """seahough as it was before the homography checks (motion/perspective.py,
+    motion/pyramid.py): both switched off, for the comparison in the same run."""
+    real = P.check_perspective, P.coarse_to_fine, P.MARGINAL
+    P.check_perspective = P.coarse_to_fine = lambda *args, **kw: None
+    P.MARGINAL = 0.0     # (nor a marginal answer voted again at the coarse scale)
     try:
         return R.METHOD_FNS["seahough"](a, b)
     finally:
-        P.check_perspective = real
+        P.check_perspective, P.coarse_to_fine, P.MARGINAL = real
 
 
 METHOD_FNS = {**R.METHOD_FNS, BEFORE: _similarity_only}

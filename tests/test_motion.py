@@ -95,13 +95,19 @@ def _assert_answers_close_their_loops(shape, pair, skip, tol):
             assert err < tol, f"frames {i}-{i + 2}: loop off by {err:.1f} px (a wrong motion)"
 
 
-def test_repetitive_tiles_are_declined_rather_than_answered_wrongly():
+def test_repetitive_tiles_are_measured_coarse_to_fine_and_close_their_loops():
     # the tiled pool (forward-oblique camera: perspective, not a similarity):
-    # every tile shift is a look-alike peak. Pairs may be declined (None), but
-    # what is answered must close its loops: 1->2->3 composed against 1->3
+    # every tile shift is a look-alike peak at the working scale, and 3 of the
+    # first 7 pairs were declined (one answered 5 % off at confidence 0.15).
+    # Voted at 80 px, where the tiles blur away, and refined up as a homography
+    # (motion/pyramid.py), every pair is measured, and 1->2->3 composed
+    # against 1->3 agree within 2.5 % of the diagonal (a tile off is 40 px
+    # near the bottom; the vote's confident similarities, fitted to a band of
+    # the frame, leave up to 28 px at the far corners)
     shape, pair, skip = _loops(data_path("sequences", "subvo_pool_chain"), 8)
-    assert sum(m is None for m in pair) >= 2  # the look-alikes are recognised as such
-    _assert_answers_close_their_loops(shape, pair, skip, 10.0)
+    assert all(m is not None for m in pair) and all(m is not None for m in skip)
+    assert sum(m.homography is not None for m in pair + skip) >= 4   # (measured coarse to fine)
+    _assert_answers_close_their_loops(shape, pair, skip, 0.025 * math.hypot(*shape))
 
 
 def test_real_sequence_answers_are_right_or_none():

@@ -1,6 +1,6 @@
 """A forward-oblique camera over a pool floor (sim.relief_sequence with tilt,
 sim.tiled_floor) and the motion measured as a homography
-(motion/perspective.py)."""
+(motion/perspective.py, motion/pyramid.py)."""
 
 import math
 
@@ -16,6 +16,7 @@ from seahough.core.preprocess import compute_gradients
 from seahough.errors import ParameterError
 from seahough.motion import pair as PAIR
 from seahough.motion import perspective as PP
+from seahough.motion import pyramid as PY
 
 
 def _seq(**kw):
@@ -241,23 +242,28 @@ def pool_pair():
     return frames[1], frames[2], truth.similarity(1, 2)[0]
 
 
-def test_an_oblique_pool_pair_is_measured_as_a_homography(pool_pair, monkeypatch):
+@pytest.mark.parametrize("check", ["coarse_to_fine", "check_perspective"])
+def test_an_oblique_pool_pair_is_measured_as_a_homography(pool_pair, monkeypatch, check):
+    # coarse to fine first; the check of the vote's candidates when it finds nothing
     a, b, want = pool_pair
     d = math.hypot(*a.shape[:2])
     seen = {}
-    real = PAIR.check_perspective
+    real = getattr(PAIR, check)
 
     def spy(*args, **kw):
         seen["check"] = real(*args, **kw)
         return seen["check"]
 
-    monkeypatch.setattr(PAIR, "check_perspective", spy)
+    monkeypatch.setattr(PAIR, check, spy)
+    if check == "check_perspective":
+        monkeypatch.setattr(PAIR, "coarse_to_fine", lambda *a, **k: None)
     m = seahough.estimate_motion(a, b)
     assert m is not None and seen.get("check") is not None
     assert _corner_error(m.matrix, want, a.shape) < 0.01 * d
     assert m.confidence >= 0.15 and m.nfa < 1e-6
     assert m.homography is not None and m.parallax > 1.0   # (the perspective it measured)
-    # without the check, the pair is declined
+    # without either check, the pair is declined
+    monkeypatch.setattr(PAIR, "coarse_to_fine", lambda *a, **k: None)
     monkeypatch.setattr(PAIR, "check_perspective", lambda *a, **k: None)
     assert seahough.estimate_motion(a, b) is None
 
@@ -309,6 +315,100 @@ def test_the_check_confirms_the_vote_never_replaces_it(pool_pair, monkeypatch):
 def test_a_confident_similarity_is_not_refitted(monkeypatch):
     frames, _ = sim.relief_sequence(n_frames=2, frame_size=(240, 320), seed=3, relief=0.0,
                                     source="procedural", water=None)
-    monkeypatch.setattr(PAIR, "check_perspective",
-                        lambda *a, **k: pytest.fail("a confident pair was refitted"))
+    for check in ("check_perspective", "coarse_to_fine"):
+        monkeypatch.setattr(PAIR, check,
+                            lambda *a, **k: pytest.fail("a confident pair was refitted"))
     assert seahough.estimate_motion(frames[0], frames[1]) is not None
+
+
+# ----------------------------------------------------------------------------
+# coarse to fine (motion/pyramid.py)
+# ----------------------------------------------------------------------------
+
+def test_coarse_to_fine_finds_the_pool_pair_from_the_coarse_vote(pool_pair, monkeypatch):
+    a, b, want = pool_pair
+    p, res, region, cfg = _pool_search(a, b)
+    gb = seahough.to_gray(b)
+    levels = []
+    real = PY.homography_icp
+
+    def spy(H0, points, edges, *args, **kw):
+        levels.append(edges.x.max())
+        return real(H0, points, edges, *args, **kw)
+
+    monkeypatch.setattr(PY, "homography_icp", spy)
+    check = PY.coarse_to_fine(p, gb, (0.8, 1.25), (-30, 30), region, cfg, res)
+    assert check is not None
+    assert _corner_error(check.matrix, want, a.shape) < 0.01 * math.hypot(*a.shape[:2])
+    assert check.confidence >= 0.15 and check.nfa < 1e-6 and check.score > 0.3
+    assert check.homography.shape == (3, 3) and check.parallax > 1.0
+    # refitted at the coarse scale (80 px), then at each doubling up to the search's
+    assert len(levels) >= 3 and levels[0] < PY.COARSE_SIZE <= levels[1] + 1
+    assert levels == sorted(levels) and levels[-1] > 300
+
+
+def test_coarse_to_fine_needs_a_free_scale_and_rotation_and_a_fit_in_view(pool_pair,
+                                                                         monkeypatch):
+    a, b, _ = pool_pair
+    p, res, region, cfg = _pool_search(a, b)
+    gb = seahough.to_gray(b)
+    assert PY.coarse_to_fine(p, gb, (1.0, 1.0), (-30, 30), region, cfg, res) is None
+    assert PY.coarse_to_fine(p, gb, (0.8, 1.25), (0.0, 0.0), region, cfg, res) is None
+    # a level whose fit leaves most of the frame out of view: no answer
+    real = PY.homography_icp
+
+    def out_of_view(*args, **kw):
+        H, score, inside = real(*args, **kw)
+        return H, score, 0.1
+
+    monkeypatch.setattr(PY, "homography_icp", out_of_view)
+    assert PY.coarse_to_fine(p, gb, (0.8, 1.25), (-30, 30), region, cfg, res) is None
+
+
+def test_a_coarse_vote_that_prefers_nothing_is_not_an_answer(pool_pair, monkeypatch):
+    # the confidence reported is the coarse vote's: a coarse peak no higher than
+    # its runner-up gives an answer that measure_pair's min_confidence declines
+    a, b, _ = pool_pair
+    real = PY.Detector.search
+
+    def flat(self, *args, **kw):
+        r = real(self, *args, **kw)
+        for d in r.detections:
+            d.confidence = 0.0
+        return r
+
+    monkeypatch.setattr(PY.Detector, "search", flat)
+    p, res, region, cfg = _pool_search(a, b)
+    check = PY.coarse_to_fine(p, seahough.to_gray(b), (0.8, 1.25), (-30, 30), region, cfg, res)
+    assert check is not None and check.confidence == 0.0
+    monkeypatch.setattr(PAIR, "check_perspective", lambda *a, **k: None)
+    assert seahough.estimate_motion(a, b) is None
+
+
+def test_a_marginal_answer_the_coarse_vote_agrees_with_stands(monkeypatch):
+    # every answer treated as marginal: on a flat pair the coarse vote agrees
+    # with the vote, and nothing is refined (nor the answer changed)
+    frames, _ = sim.relief_sequence(n_frames=2, frame_size=(240, 320), seed=3, relief=0.0,
+                                    source="procedural", water=None)
+    want = seahough.estimate_motion(frames[0], frames[1])
+    monkeypatch.setattr(PAIR, "MARGINAL", 1.01)
+    seen = []
+    real = PAIR.coarse_vote
+
+    def spy(*args, **kw):
+        seen.append(real(*args, **kw))
+        return seen[-1]
+
+    monkeypatch.setattr(PAIR, "coarse_vote", spy)
+    monkeypatch.setattr(PAIR, "refine_up", lambda *a, **k: pytest.fail("refined an agreed answer"))
+    got = seahough.estimate_motion(frames[0], frames[1])
+    assert seen and seen[0] is not None and seen[0].agrees(want.matrix, frames[0].shape)
+    assert got is not None and np.allclose(got.matrix, want.matrix)
+
+
+def test_the_coarse_vote_agrees_within_two_coarse_pixels():
+    m = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    vote = PY.CoarseVote(m, 0.5, 1 / 16)          # 80 px for a 1280 px frame
+    shift = lambda dx: np.array([[1.0, 0.0, dx], [0.0, 1.0, 0.0]])
+    assert vote.agrees(shift(0.0), (720, 1280)) and vote.agrees(shift(31.0), (720, 1280))
+    assert not vote.agrees(shift(33.0), (720, 1280))   # (a tile of the pool: 40 px)

@@ -768,10 +768,13 @@ def _step_disagreements(tmp_path, sequence, limit=10.0, config=None):
         if b["status"] != "measured" or a["status"] not in ("origin", "measured"):
             continue
         m = seahough.estimate_motion(files[a["index"]], files[b["index"]])
-        if m is None or m.confidence < 0.2:
+        if m is None or m.confidence < 0.2 or m.homography is not None:
             continue  # no reference (below 0.2 a detection is flagged ambiguous: on this
             # pool estimate_motion once answered a 37 px jump at 0.17 between two frames
-            # that every other pair says moved a few px)
+            # that every other pair says moved a few px; a pair it measured as a
+            # homography, coarse to fine, reports the homography's least-squares
+            # similarity over the frame: on the pool's perspective change 15-33 px
+            # from the vote's, which the dead reckoning reports)
         step = compose(np.reshape(b["matrix"], (2, 3)), invert_matrix(np.reshape(a["matrix"], (2, 3))))
         err = float(np.max(np.hypot(*(apply_matrix(step, grid) - apply_matrix(m.matrix, grid)).T)))
         compared += 1

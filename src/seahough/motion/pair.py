@@ -16,6 +16,7 @@ from ..errors import ImageSizeError, ParameterError, PatternError
 from ..geometry import frame_centre, matrix_to_pose, overlap, shift_origin, wrap_angle
 from .parallax import check_locally, frame_points
 from .perspective import check_perspective
+from .pyramid import coarse_to_fine, coarse_vote, refine_up
 from .._validate import check_max_nfa, number
 from ..io.images import to_gray
 
@@ -35,6 +36,11 @@ MIN_MOTION_SIDE = 64
 #: pool (the only repeated texture of the dev data, in the test part of
 #: bench/bench_real_pairs.py: not a held-out figure there), 0.02-0.42.
 RESCUE_DISTINCT = 0.5
+#: A vote's answer confident under this is measured coarse to fine as well
+#: (:func:`measure_pair`): over the real tiled pool a tile-shifted look-alike
+#: 5 % of the diagonal off came back at confidence 0.15, where the pair
+#: measured coarse to fine explains 0.83 of the frame's edges against its 0.18.
+MARGINAL = 0.3
 
 
 @dataclass
@@ -80,10 +86,12 @@ class Motion:
     measurement, with each part of the frame allowed a small shift of its
     own, and ``parallax`` is how far the parts stray from the similarity
     fitted to them. When the vote hardly preferred its answer (a tiled
-    floor, a camera that looks ahead) and the answer was confirmed as a
-    homography (:mod:`seahough.motion.perspective`), they are those of the
-    homography, the matrix is the similarity that fits it best over the
-    frame, and ``homography`` is it.
+    floor, a camera that looks ahead) and the pair was measured again as a
+    homography, coarse to fine (:mod:`seahough.motion.pyramid`) or from the
+    vote's candidates (:mod:`seahough.motion.perspective`), they are those
+    of the homography (the confidence: that of the coarse vote, or of the
+    candidates' homographies), the matrix is the similarity that fits it
+    best over the frame, and ``homography`` is it.
     """
 
     matrix: np.ndarray
@@ -271,7 +279,8 @@ class PairMeasure:
 def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, region, *,
                  min_score: float, min_confidence: float, config: Config,
                  features: Features | None = None, rescue: bool = True,
-                 tiles: bool = False, perspective: bool = True) -> PairMeasure | None:
+                 tiles: bool = False, perspective: bool = True,
+                 coarse: bool = True) -> PairMeasure | None:
     """The search that measures a pair: the previous frame (``pattern``) in the
     current one (``gray``, a checked grey image as :func:`~seahough.to_gray`
     gives), its centre within ``region`` (x0, y0, x1, y1; current-frame
@@ -293,14 +302,23 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
     similarity's).
 
     When the vote's runner-up is too close for the tile check (a repeated
-    texture, a camera that looks ahead), and ``perspective``, the search's
-    best candidates are refitted as homographies
+    texture, a camera that looks ahead), the pair is measured coarse to fine
+    when ``coarse`` (:func:`~seahough.motion.pyramid.coarse_to_fine`: voted
+    again at 80 px, where the repeats blur away, and refined up as a
+    homography); failing that, and when ``perspective``, the search's best
+    candidates are refitted as homographies
     (:func:`~seahough.motion.perspective.check_perspective`), which may
-    confirm the vote's own answer, never another. The dead reckoning does
-    not ask for it: over the real tiled pool its searches against a
-    keyframe a few frames back confirmed look-alikes a tile or two off
-    (28 and 85 px at confidence 0.39-0.41, where the adjacent pairs agree
-    on a few px).
+    confirm the vote's own answer, never another. In a search that may
+    rescue, an answer the vote barely prefers (confidence under
+    :data:`MARGINAL`) is voted again at the coarse scale (``coarse``); when
+    the two disagree (:data:`~seahough.motion.pyramid.AGREE`), the coarse
+    answer is refined up, and the measurement that explains more of the
+    frame's edges is kept. The
+    dead reckoning does not ask for the check of the candidates
+    (``perspective=False``): over the real tiled pool, in searches against a
+    keyframe a few frames back, it confirmed look-alikes a tile or two off
+    (28 and 85 px at confidence 0.39-0.41, where the adjacent pairs agree on
+    a few px).
     """
     det = Detector(pattern, scale_range, angle_range, config=config, max_results=1,
                    min_score=min_score, min_confidence=0.0, max_nfa=math.inf,
@@ -311,6 +329,18 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
     own = None if d is None else PairMeasure(np.asarray(d.matrix, float), d.confidence,
                                               d.score, d.nfa)
     if d is not None and d.confidence >= min_confidence:
+        if coarse and rescue and d.confidence < MARGINAL:
+            # a vote that barely prefers its answer: voted again at the coarse
+            # scale; when that disagrees, refined up, and the answer that
+            # explains more of the frame is kept
+            vote = coarse_vote(pattern, gray, scale_range, angle_range, region, config, res)
+            if (vote is not None and vote.confidence >= min_confidence
+                    and not vote.agrees(own.matrix, gray.shape)):
+                fine = refine_up(vote, pattern, gray, scale_range, angle_range, region, config,
+                                 res)
+                if fine is not None and fine.score > d.score:
+                    return PairMeasure(fine.matrix, fine.confidence, fine.score, fine.nfa,
+                                       fine.parallax, fine.homography)
         if tiles:   # (the answer's own tiles: no other candidate)
             check = check_locally(pattern, res, d, region, scale_range, angle_range, config,
                                   candidates=0)
@@ -327,15 +357,21 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
         return PairMeasure(check.matrix, check.confidence, check.score, check.nfa,
                            check.parallax, check.homography)
     # a vote that hardly prefers its answer: a repeated texture (a tiled
-    # floor), or a camera that looks ahead; the search's best candidates
-    # refitted as homographies may confirm the vote's answer
-    if not perspective:
-        return own
-    persp = check_perspective(pattern, res, d, region, scale_range, angle_range, config,
-                              gray=gray, frame=frame)
-    if persp is not None and persp.confidence >= min_confidence and persp.score >= min_score:
-        return PairMeasure(persp.matrix, persp.confidence, persp.score, persp.nfa,
-                           persp.parallax, persp.homography)
+    # floor), or a camera that looks ahead. The pair voted again where the
+    # repeats blur away and refined up as a homography; failing that, the
+    # search's best candidates refitted as homographies may confirm the
+    # vote's answer
+    fine = None
+    if coarse:
+        fine = coarse_to_fine(pattern, gray, scale_range, angle_range, region, config, res,
+                              frame=frame)
+    if perspective and (fine is None or fine.confidence < min_confidence
+                        or fine.score < min_score):
+        fine = check_perspective(pattern, res, d, region, scale_range, angle_range, config,
+                                 gray=gray, frame=frame)
+    if fine is not None and fine.confidence >= min_confidence and fine.score >= min_score:
+        return PairMeasure(fine.matrix, fine.confidence, fine.score, fine.nfa, fine.parallax,
+                           fine.homography)
     return own
 
 

@@ -58,7 +58,8 @@ from ..geometry import fit_similarity
 from .parallax import (SAME, LocalCheck, _candidate_matrix, frame_points, full_matrix,
                        work_matrix)
 
-__all__ = ["CANDIDATES", "RADII", "homography_icp", "similarity_of", "check_perspective"]
+__all__ = ["CANDIDATES", "RADII", "homography_icp", "similarity_of", "check_perspective",
+           "judge_homography"]
 
 #: Candidate poses of the search refined as homographies (the best by score).
 CANDIDATES = 5
@@ -264,6 +265,28 @@ def check_perspective(pattern, result, detection, region, scale_range, angle_ran
     agree, score, _, H, _, c_at = fits[0]
     runner = max((f[0] for f in fits[1:] if gap(f[5], c_at) > SAME), default=0.0)
     conf = float(np.clip((agree - runner) / max(1.0 - runner, 1e-9), 0.0, 1.0))
+    Hf, nfa = judge_homography(H, pattern, result, region, scale_range, angle_range, config,
+                               points, gray)
+    sim = similarity_of(Hf, feats.gradients.full_shape)
+    if sim is None:
+        return None
+    S, rms = sim
+    return LocalCheck(S, conf, score, nfa, rms, Hf)
+
+
+def judge_homography(H, pattern, result, region, scale_range, angle_range, config, points,
+                     gray=None):
+    """A working-scale homography ``H`` (3x3) of a frame pair searched as
+    ``result``: ``(Hf, nfa)``, the homography in full-resolution pixels
+    (finished at :data:`FINE` times the working scale when ``gray``, the
+    current frame, is given), and the number of
+    false alarms of the agreement of the previous frame's ``points`` (at
+    the working scale) at ``H``: the search's poses times the freedom the
+    homography adds (:data:`EXTRA_DOF`)."""
+    feats, factor = result.features, result.factor
+    fx, fy = feats.gradients.fx, feats.gradients.fy
+    tol = math.radians(config.angle_tolerance)
+    radius = max(1.25, config.match_radius * factor)
     # the evidence: the points mapped by the homography, at the identity pose
     px, py, pa = points
     u, v, a = map_points(H, px, py, pa)
@@ -280,11 +303,7 @@ def check_perspective(pattern, result, detection, region, scale_range, angle_ran
     if gray is not None and FINE > 1 and factor < 1:
         Hf = _finish(Hf, pattern, gray, min(1.0, FINE * factor), config, tol,
                      max_move=FINISH_MOVE / factor)
-    sim = similarity_of(Hf, feats.gradients.full_shape)
-    if sim is None:
-        return None
-    S, rms = sim
-    return LocalCheck(S, conf, score, float(10.0 ** max(ev.log10_nfa, MIN_LOG10_NFA)), rms, Hf)
+    return Hf, float(10.0 ** max(ev.log10_nfa, MIN_LOG10_NFA))
 
 
 def _finish(Hf, pattern, gray, factor, config, tol, max_move):

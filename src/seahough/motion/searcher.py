@@ -88,10 +88,15 @@ class Searcher:
         s_range = (max(s0, 1e-3), max(s1, s0, 1e-3))
         if s_range[1] / s_range[0] > 60:
             s_range = (s_range[0], s_range[0] * 60)
+        # (neither the check of the candidates, measure_pair's docstring, nor coarse
+        # to fine, motion/pyramid.py: on the real tiled pool it measured 11 of 11
+        # pairs, against 10, but 4 steps, its least-squares similarities composed
+        # with the vote's against a keyframe, moved 35-60 px from the reference
+        # where they had been 10-31 px)
         return measure_pair(pattern, gray, s_range, (a0, a1), region,
                             min_score=self.tuning.min_score,
                             min_confidence=self.tuning.min_confidence, config=cfg,
-                            features=feats, rescue=rescue, perspective=False)
+                            features=feats, rescue=rescue, perspective=False, coarse=False)
 
     def ranges_around(self, base, n: int, widen: int = 1):
         """Scale and angle ranges of the user's per-pair ranges, ``n`` frames
