@@ -15,8 +15,8 @@ from ..core.preprocess import choose_factor
 from ..errors import ImageSizeError, ParameterError, PatternError
 from ..geometry import frame_centre, matrix_to_pose, overlap, shift_origin, wrap_angle
 from .parallax import check_locally, frame_points
-from .perspective import check_perspective
-from .pyramid import coarse_to_fine, coarse_vote, refine_up
+from .perspective import check_perspective, judge_homography
+from .pyramid import CoarseVote, coarse_to_fine, coarse_vote, ladder
 from .._validate import check_max_nfa, number
 from ..io.images import to_gray
 
@@ -311,9 +311,9 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
     confirm the vote's own answer, never another. In a search that may
     rescue, an answer the vote barely prefers (confidence under
     :data:`MARGINAL`) is voted again at the coarse scale (``coarse``); when
-    the two disagree (:data:`~seahough.motion.pyramid.AGREE`), the coarse
-    answer is refined up, and the measurement that explains more of the
-    frame's edges is kept. The
+    the two disagree (:data:`~seahough.motion.pyramid.AGREE`), both are
+    refitted as homographies, and the one that explains more of the frame's
+    edges is reported (as a homography, whichever it is). The
     dead reckoning does not ask for the check of the candidates
     (``perspective=False``): over the real tiled pool, in searches against a
     keyframe a few frames back, it confirmed look-alikes a tile or two off
@@ -331,26 +331,28 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
     if d is not None and d.confidence >= min_confidence:
         if coarse and rescue and d.confidence < MARGINAL:
             # a vote that barely prefers its answer: voted again at the coarse
-            # scale; when that disagrees, refined up, and the answer that
-            # explains more of the frame is kept
+            # scale; when that disagrees, both refitted as homographies, and
+            # the one that explains more of the frame is kept
             vote = coarse_vote(pattern, gray, scale_range, angle_range, region, config, res)
             if (vote is not None and vote.confidence >= min_confidence
                     and not vote.agrees(own.matrix, gray.shape)):
-                fine = refine_up(vote, pattern, gray, scale_range, angle_range, region, config,
-                                 res)
-                if fine is not None and fine.score > d.score:
-                    return PairMeasure(fine.matrix, fine.confidence, fine.score, fine.nfa,
-                                       fine.parallax, fine.homography)
+                fine = _explains_more(vote, own, d, pattern, gray, scale_range, angle_range,
+                                      region, config, res)
+                if fine is not None:
+                    return fine
         if tiles:   # (the answer's own tiles: no other candidate)
             check = check_locally(pattern, res, d, region, scale_range, angle_range, config,
                                   candidates=0)
             if check is not None:
                 own.parallax, own.homography = check.parallax, check.homography
         return own
-    if not (rescue and res.candidates):
+    if not rescue or res.features is None:
         return own
-    frame = frame_points(pattern, res.factor, config)   # (the previous frame's, for both checks)
-    check = check_locally(pattern, res, d, region, scale_range, angle_range, config, frame=frame)
+    frame = frame_points(pattern, res.factor, config)   # (the previous frame's, for the checks)
+    check = None
+    if res.candidates:
+        check = check_locally(pattern, res, d, region, scale_range, angle_range, config,
+                              frame=frame)
     if check is not None and check.distinct >= RESCUE_DISTINCT:
         # (a peak the vote hardly prefers to its runner-up is a look-alike of a
         # repeated texture as often as a view spoilt by parallax: not rescued)
@@ -373,6 +375,29 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
         return PairMeasure(fine.matrix, fine.confidence, fine.score, fine.nfa, fine.parallax,
                            fine.homography)
     return own
+
+
+def _explains_more(vote, own, d, pattern, gray, scale_range, angle_range, region, config,
+                   res) -> PairMeasure | None:
+    """A marginal answer the coarse vote disagrees with: both refitted as
+    homographies up to the working scale (:func:`~.pyramid.ladder`; like
+    with like: a similarity's score and a homography's are not comparable),
+    and the one that matches more of the previous frame's points judged and
+    reported as a homography (the vote's own when they tie; its confidence
+    with it). None when neither could be fitted."""
+    frame = frame_points(pattern, res.factor, config)
+    mine = CoarseVote(np.vstack([own.matrix, [0.0, 0.0, 1.0]]), d.confidence, res.factor)
+    fits = [(f, v.confidence) for v in (mine, vote)
+            if (f := ladder(v, pattern, gray, config, res, frame)) is not None]
+    if not fits:
+        return None
+    (H, score, points), conf = max(fits, key=lambda f: f[0][1])   # (the first on a tie)
+    fine = judge_homography(H, conf, score, pattern, res, region, scale_range, angle_range,
+                            config, points, gray)
+    if fine is None:
+        return None
+    return PairMeasure(fine.matrix, fine.confidence, fine.score, fine.nfa, fine.parallax,
+                       fine.homography)
 
 
 def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),

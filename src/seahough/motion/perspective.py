@@ -265,24 +265,21 @@ def check_perspective(pattern, result, detection, region, scale_range, angle_ran
     agree, score, _, H, _, c_at = fits[0]
     runner = max((f[0] for f in fits[1:] if gap(f[5], c_at) > SAME), default=0.0)
     conf = float(np.clip((agree - runner) / max(1.0 - runner, 1e-9), 0.0, 1.0))
-    Hf, nfa = judge_homography(H, pattern, result, region, scale_range, angle_range, config,
-                               points, gray)
-    sim = similarity_of(Hf, feats.gradients.full_shape)
-    if sim is None:
-        return None
-    S, rms = sim
-    return LocalCheck(S, conf, score, nfa, rms, Hf)
+    return judge_homography(H, conf, score, pattern, result, region, scale_range, angle_range,
+                            config, points, gray)
 
 
-def judge_homography(H, pattern, result, region, scale_range, angle_range, config, points,
-                     gray=None):
+def judge_homography(H, confidence, score, pattern, result, region, scale_range, angle_range,
+                     config, points, gray=None) -> LocalCheck | None:
     """A working-scale homography ``H`` (3x3) of a frame pair searched as
-    ``result``: ``(Hf, nfa)``, the homography in full-resolution pixels
-    (finished at :data:`FINE` times the working scale when ``gray``, the
-    current frame, is given), and the number of
-    false alarms of the agreement of the previous frame's ``points`` (at
-    the working scale) at ``H``: the search's poses times the freedom the
-    homography adds (:data:`EXTRA_DOF`)."""
+    ``result``, as a :class:`~.parallax.LocalCheck` with the ``confidence``
+    and ``score`` given: its matrix the similarity that fits the homography
+    best over the frame (None when too little of the frame stays in view),
+    its homography in full-resolution pixels (finished at :data:`FINE` times
+    the working scale when ``gray``, the current frame, is given), and the
+    number of false alarms of the agreement of the previous frame's
+    ``points`` (at the working scale) at ``H``: the search's poses times the
+    freedom the homography adds (:data:`EXTRA_DOF`)."""
     feats, factor = result.features, result.factor
     fx, fy = feats.gradients.fx, feats.gradients.fy
     tol = math.radians(config.angle_tolerance)
@@ -303,7 +300,12 @@ def judge_homography(H, pattern, result, region, scale_range, angle_range, confi
     if gray is not None and FINE > 1 and factor < 1:
         Hf = _finish(Hf, pattern, gray, min(1.0, FINE * factor), config, tol,
                      max_move=FINISH_MOVE / factor)
-    return Hf, float(10.0 ** max(ev.log10_nfa, MIN_LOG10_NFA))
+    sim = similarity_of(Hf, feats.gradients.full_shape)
+    if sim is None:
+        return None
+    S, rms = sim
+    return LocalCheck(S, confidence, score, float(10.0 ** max(ev.log10_nfa, MIN_LOG10_NFA)), rms,
+                      Hf)
 
 
 def _finish(Hf, pattern, gray, factor, config, tol, max_move):

@@ -13,8 +13,7 @@ the perspective change is a pixel or two: the vote's peak there is the
 motion, a few coarse pixels off.
 
 So the previous frame is searched for in the current one at the coarse
-scale; its answer (when the coarse vote prefers it to its runner-up) is
-refitted as a homography at that scale
+scale; its answer is refitted as a homography at that scale
 (:func:`~seahough.motion.perspective.homography_icp`, radii
 :data:`COARSE_RADII`), then at every doubling of the scale up to the
 search's working scale (radii :data:`STEP_RADII`: each level starts
@@ -25,7 +24,8 @@ measured at the working scale, as for the other checks: ``score``, the
 share of the previous frame's edge points found again; ``nfa``, their
 agreement against chance, the working-scale search's poses times the
 homography's extra freedom; ``confidence``: the coarse vote's (how much it
-preferred its answer to the runner-up).
+preferred its answer to the runner-up), which the caller's
+``min_confidence`` judges.
 """
 
 from __future__ import annotations
@@ -39,13 +39,12 @@ from ..core.detector import Detector
 from ..core.keypoints import find_edge_points
 from ..core.pattern import Pattern
 from ..core.preprocess import compute_gradients, scale_image
-from ..errors import PatternError
+from ..errors import ImageSizeError, PatternError
 from .parallax import LocalCheck, frame_points, full_matrix, work_matrix
-from .perspective import (FINE_POINTS, MIN_IN_VIEW, homography_icp, judge_homography,
-                          similarity_of)
+from .perspective import FINE_POINTS, MIN_IN_VIEW, homography_icp, judge_homography
 
 __all__ = ["COARSE_SIZE", "COARSE_POINTS", "COARSE_RADII", "STEP_RADII", "AGREE", "CoarseVote",
-           "coarse_vote", "refine_up", "coarse_to_fine"]
+           "coarse_vote", "ladder", "refine_up", "coarse_to_fine"]
 
 #: The coarse scale: the frame's long side, pixels.
 COARSE_SIZE = 80
@@ -78,8 +77,10 @@ def coarse_to_fine(pattern, gray, scale_range, angle_range, region, config, resu
     distance of the homography from it, full-resolution pixels), or None:
     the working scale is not finer than the coarse one, the scale or the
     rotation is known (a homography would free it), the coarse search found
-    nothing, or a level's fit failed (under :data:`~.perspective.MIN_IN_VIEW`
-    of the points left in view, or behind the camera).
+    nothing, a level's fit failed (:func:`ladder`: nothing matched, under
+    :data:`~.perspective.MIN_IN_VIEW` of the points left in view, or a
+    corner behind the camera), or the homography keeps too little of the
+    frame in view to fit a similarity to it.
 
     Examples
     --------
@@ -145,27 +146,31 @@ def coarse_vote(pattern, gray, scale_range, angle_range, region, config, result
         return None
     if scale_range[0] == scale_range[1] or angle_range[0] == angle_range[1]:
         return None
-    coarse = config.replace(target_size=COARSE_SIZE, n_pattern_points=COARSE_POINTS[0],
-                            n_verify_points=COARSE_POINTS[1])
+    h, w = gray.shape[:2]
+    if min(1.0, COARSE_SIZE / max(h, w)) >= result.factor * 0.99:
+        return None   # (a frame too small to be searched coarser than it was)
+    coarse = config.replace(target_size=COARSE_SIZE, downscale=None,
+                            n_pattern_points=COARSE_POINTS[0], n_verify_points=COARSE_POINTS[1])
     # (searched in both frames brought to twice the coarse size: the search's
     # own finish at "full resolution" then costs what the coarse search does)
-    h, w = gray.shape[:2]
     small = min(1.0, 2.0 * COARSE_SIZE / max(h, w))
     prev, fx, fy = scale_image(pattern.grey_levels(), small)
     cur, _, _ = scale_image(gray, small)
     x0, y0, x1, y1 = region
     region_small = ((x0 + 0.5) * fx - 0.5, (y0 + 0.5) * fy - 0.5,
                     (x1 + 0.5) * fx - 0.5, (y1 + 0.5) * fy - 0.5)
+    ox, oy = pattern.origin
     try:
-        ps = Pattern.from_frame(prev, config=coarse)
+        ps = Pattern.from_frame(prev, ((ox + 0.5) * fx - 0.5, (oy + 0.5) * fy - 0.5),
+                                config=coarse)
         det = Detector(ps, scale_range, angle_range, config=coarse, max_results=1,
                        min_score=0.0, min_confidence=0.0, max_nfa=math.inf,
                        search_region=region_small)
         res = det.search(cur)
-    except PatternError:   # (no edges left at that size)
+    except (PatternError, ImageSizeError):   # (no edges left at that size, or a strip)
         return None
     if not res.detections or res.factor * small >= result.factor * 0.99:
-        return None   # (nothing found, or a frame too small to be coarser than the search)
+        return None
     d = res.detections[0]
     Hf = full_matrix(np.vstack([np.asarray(d.matrix, float), [0.0, 0.0, 1.0]]), fx, fy)
     return CoarseVote(Hf / Hf[2, 2], float(d.confidence), res.factor * small)
@@ -176,13 +181,32 @@ def refine_up(vote: CoarseVote, pattern, gray, scale_range, angle_range, region,
     """The coarse answer refitted as a homography at the coarse scale, then at
     each doubling up to the working scale of ``result``, and judged there
     (:func:`coarse_to_fine`'s second step; None: a level's fit failed)."""
+    fit = ladder(vote, pattern, gray, config, result, frame)
+    if fit is None:
+        return None
+    H, score, points = fit
+    return judge_homography(H, vote.confidence, score, pattern, result, region, scale_range,
+                            angle_range, config, points, gray)
+
+
+def ladder(vote: CoarseVote, pattern, gray, config, result, frame=None):
+    """``vote``'s answer refitted as a homography from its scale up to the
+    working scale of ``result`` (:func:`coarse_to_fine`): ``(H, score,
+    points)``, the working-scale homography, the share of the previous
+    frame's ``points`` (its strongest edge points at the working scale) it
+    matches there; None when a level's fit matched nothing, kept under
+    :data:`~.perspective.MIN_IN_VIEW` of the points in view, or put a
+    corner behind the camera. An answer at the working scale itself is
+    refitted there only."""
     feats, top = result.features, result.factor
     tol = math.radians(config.angle_tolerance)
     Hf = vote.matrix
-    levels = [vote.factor]
+    levels = [min(vote.factor, top)]
     while levels[-1] * 2 < top * 0.99:
         levels.append(levels[-1] * 2)
-    levels.append(top)
+    if levels[-1] < top * 0.99:
+        levels.append(top)
+    levels[-1] = top
     for k, factor in enumerate(levels):
         radii = COARSE_RADII if k == 0 else STEP_RADII
         if factor == top:   # (the search's own features)
@@ -200,13 +224,7 @@ def refine_up(vote: CoarseVote, pattern, gray, scale_range, angle_range, region,
             return None
         Hf = full_matrix(H, grad.fx, grad.fy)
         Hf = Hf / Hf[2, 2]
-    Hf, nfa = judge_homography(H, pattern, result, region, scale_range, angle_range, config,
-                               points, gray)
-    sim = similarity_of(Hf, feats.gradients.full_shape)
-    if sim is None:
-        return None
-    S, rms = sim
-    return LocalCheck(S, vote.confidence, score, nfa, rms, Hf)
+    return H, score, points
 
 
 def _in_front(H, shape) -> bool:
