@@ -1152,10 +1152,16 @@ def findings(results) -> str:
         if sv:
             txt += (f"On the tiled pool (forward-oblique camera: the motion is a perspective "
                     f"expansion, not a similarity) seahough declines {sv['none']} of {sv['pairs']} "
-                    "pairs (confidence < 0.15: the tile grid gives near-equal peaks; "
-                    "tests/test_motion.py checks that what it does answer closes its loops); phase "
-                    "correlation's small loop inconsistency there is self-consistency of a "
-                    "translation-only model, not accuracy. ")
+                    "pairs. Where the vote cannot vouch for its answer (the tile grid gives "
+                    "near-equal peaks) the pair is measured coarse to fine, as a homography "
+                    "(docs/method.md), and its motion is the similarity that fits that "
+                    "homography over the frame; where the vote does vouch, its similarity is "
+                    "fitted to the band of the frame it explains. The two describe a perspective "
+                    "change differently (up to about 2 % of the diagonal at the far corners), "
+                    "which is most of its loop inconsistency here (tests/test_motion.py checks "
+                    "the loops close within 2.5 %: a tile off is 40 px); phase correlation's "
+                    "small loop inconsistency is self-consistency of a translation-only model, "
+                    "not accuracy. ")
         if sp and sps:
             if sp["ms"] < sps["ms"]:
                 narrowly = ", narrowly" if sp["ms"] > 0.9 * sps["ms"] else ""
