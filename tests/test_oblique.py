@@ -469,3 +469,19 @@ def test_a_strip_too_thin_to_search_coarsely_is_measured_or_declined_without_err
     a, b = big[:shape[0], :shape[1]], big[6:6 + shape[0], 9:9 + shape[1]]
     m = seahough.estimate_motion(a, b)        # (raised ImageSizeError from the coarse search)
     assert m is None or abs(m.dx + 9) < 2
+
+
+def test_a_coarse_vote_less_decided_than_the_vote_does_not_overrule_it(pool_pair, monkeypatch):
+    # (the real Skerki mud pair: the coarse vote, wrong, at 0.25 against the vote's 0.27)
+    a, b, _ = pool_pair
+    p, res, region, cfg = _pool_search(a, b)
+    d = res.detections[0]
+    d.confidence = 0.27
+    far = np.vstack([d.matrix + np.array([[0.0, 0.0, 200.0], [0.0, 0.0, 0.0]]), [0, 0, 1]])
+    monkeypatch.setattr(PAIR, "Detector", lambda *args, **kw: type(
+        "Fixed", (), {"search": lambda self, *a, **k: res})())
+    monkeypatch.setattr(PAIR, "coarse_vote", lambda *a, **k: PY.CoarseVote(far, 0.25, 1 / 16))
+    monkeypatch.setattr(PAIR, "ladder", lambda *a, **k: pytest.fail("refitted"))
+    got = PAIR.measure_pair(p, seahough.to_gray(b), (0.8, 1.25), (-30, 30), region,
+                            min_score=0.15, min_confidence=0.15, config=cfg)
+    assert got is not None and got.homography is None and np.allclose(got.matrix, d.matrix)
