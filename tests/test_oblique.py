@@ -32,6 +32,19 @@ def _corner_error(a, b, shape):
     return float(np.hypot(*((c @ a[:, :2].T + a[:, 2]) - (c @ b[:, :2].T + b[:, 2])).T).max())
 
 
+def _spy(monkeypatch, module, name):
+    """Replace ``module.name`` by a wrapper that records what each call returned."""
+    seen = []
+    real = getattr(module, name)
+
+    def spy(*args, **kw):
+        seen.append(real(*args, **kw))
+        return seen[-1]
+
+    monkeypatch.setattr(module, name, spy)
+    return seen
+
+
 # ----------------------------------------------------------------------------
 # the simulator
 # ----------------------------------------------------------------------------
@@ -247,18 +260,11 @@ def test_an_oblique_pool_pair_is_measured_as_a_homography(pool_pair, monkeypatch
     # coarse to fine first; the check of the vote's candidates when it finds nothing
     a, b, want = pool_pair
     d = math.hypot(*a.shape[:2])
-    seen = {}
-    real = getattr(PAIR, check)
-
-    def spy(*args, **kw):
-        seen["check"] = real(*args, **kw)
-        return seen["check"]
-
-    monkeypatch.setattr(PAIR, check, spy)
+    seen = _spy(monkeypatch, PAIR, check)
     if check == "check_perspective":
         monkeypatch.setattr(PAIR, "coarse_to_fine", lambda *a, **k: None)
     m = seahough.estimate_motion(a, b)
-    assert m is not None and seen.get("check") is not None
+    assert m is not None and seen and seen[-1] is not None
     assert _corner_error(m.matrix, want, a.shape) < 0.01 * d
     assert m.confidence >= 0.15 and m.nfa < 1e-6
     assert m.homography is not None and m.parallax > 1.0   # (the perspective it measured)
@@ -382,14 +388,7 @@ def test_a_coarse_vote_that_prefers_nothing_is_not_an_answer(pool_pair, monkeypa
     check = PY.coarse_to_fine(p, seahough.to_gray(b), (0.8, 1.25), (-30, 30), region, cfg, res)
     assert check is not None and check.confidence == 0.0
     monkeypatch.setattr(PAIR, "check_perspective", lambda *a, **k: None)
-    seen = []
-    real = PAIR.coarse_to_fine
-
-    def spy(*args, **kw):
-        seen.append(real(*args, **kw))
-        return seen[-1]
-
-    monkeypatch.setattr(PAIR, "coarse_to_fine", spy)
+    seen = _spy(monkeypatch, PAIR, "coarse_to_fine")
     assert seahough.estimate_motion(a, b) is None
     assert seen and seen[0] is not None and seen[0].confidence == 0.0   # (found, declined)
 
@@ -401,14 +400,7 @@ def test_a_marginal_answer_the_coarse_vote_agrees_with_stands(monkeypatch):
                                     source="procedural", water=None)
     want = seahough.estimate_motion(frames[0], frames[1])
     monkeypatch.setattr(PAIR, "MARGINAL", 1.01)
-    seen = []
-    real = PAIR.coarse_vote
-
-    def spy(*args, **kw):
-        seen.append(real(*args, **kw))
-        return seen[-1]
-
-    monkeypatch.setattr(PAIR, "coarse_vote", spy)
+    seen = _spy(monkeypatch, PAIR, "coarse_vote")
     monkeypatch.setattr(PAIR, "ladder", lambda *a, **k: pytest.fail("refined an agreed answer"))
     got = seahough.estimate_motion(frames[0], frames[1])
     assert seen and seen[0] is not None and seen[0].agrees(want.matrix, frames[0].shape)
