@@ -182,7 +182,8 @@ def images(quick: bool):
     return items
 
 
-#: The DEPENDENCE values every detection's NFA is also computed at (for --fit).
+#: The DEPENDENCE values (pixels of edge) every detection's NFA is also
+#: computed at (for --fit), besides the product's.
 DEPENDENCES = (4.0, 8.0, 12.0, 14.0, 16.0, 18.0, 20.0, 24.0)
 #: The shares of the fit's grid (log10 of the counted poses taken as tries;
 #: applied to the stored rows).
@@ -206,7 +207,7 @@ def collect(quick: bool) -> dict:
         judged[0] += time.perf_counter() - t
         used, by = N.DEPENDENCE, {}
         try:
-            for d in DEPENDENCES:
+            for d in sorted({*DEPENDENCES, used}):   # (the product's, and the grid)
                 N.DEPENDENCE = d
                 judge(ctx, c)
                 by[d] = c.evidence.log10_nfa
@@ -230,7 +231,7 @@ def collect(quick: bool) -> dict:
                     res = det.search(img)
                     dt = time.perf_counter() - t
                     # (the judge ran 2 + len(DEPENDENCES) times: its time counts once)
-                    t_search += dt - (judged[0] - j0) * (1 + len(DEPENDENCES))
+                    t_search += dt - (judged[0] - j0) * (1 + len({*DEPENDENCES, N.DEPENDENCE}))
                     searches.append((group, split, name))
                     judged_c = [c for c in res.candidates if c.evidence is not None]
                     for d in res.detections:

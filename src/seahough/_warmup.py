@@ -32,7 +32,8 @@ import numpy as np
 
 #: The modules that define kernels.
 KERNEL_MODULES = ("seahough.core.kernels._common", "seahough.core.kernels.edges",
-                  "seahough.core.kernels.voting", "seahough.core.kernels.matching")
+                  "seahough.core.kernels.voting", "seahough.core.kernels.matching",
+                  "seahough.core.kernels.evidence")
 
 
 def kernels() -> dict:

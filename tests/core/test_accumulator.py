@@ -368,10 +368,16 @@ def test_the_detector_takes_the_gap_of_drawn_patterns_only():
         assert Detector(patch, config=cfg)._edge_gap(patch.features(0.5, cfg), 0.5) is None
 
 
-def test_a_marker_board_is_not_taken_one_ring_off():
+def test_a_marker_board_is_not_taken_one_ring_off(monkeypatch):
     # scenes where the board's derived bins (translation bin 4.6 working px,
     # its rings 6.8 wide) answered the pose one ring off; half-ring bins find it
+    # (the ranking's local vote over shifts, ranking._shifted, since finds them
+    # with the old bins too: it is left out here, the bins are what is tested;
+    # since the refinement's points cover every side, candidates.icp_subset,
+    # the old bins find 2 of the 4)
     from seahough import Detector, Pattern, sim as S
+    from seahough.core import ranking
+    monkeypatch.setattr(ranking, "_shifted", lambda ctx, pose, radius, points: pose)
 
     def at_truth(found, t):   # (bench_colour's success rule)
         d = found[0] if found else None
@@ -392,4 +398,4 @@ def test_a_marker_board_is_not_taken_one_ring_off():
                                                 source="procedural")
         for name, det in (("now", now), ("before", before)):
             found[name] += at_truth(det.detect(scene), truth)
-    assert found["now"] >= 3 and found["before"] <= 1, found
+    assert found["now"] >= 3 and found["before"] < found["now"], found

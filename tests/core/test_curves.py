@@ -149,7 +149,10 @@ def test_a_simulated_curved_rope_in_water():
     d = np.hypot(q[:, None, 0] - truth.points[None, :, 0],
                  q[:, None, 1] - truth.points[None, :, 1]).min(axis=1)
     assert np.mean(d <= 2.0) >= 0.9
-    assert covered(truth.points[truth.visible][::4], c.points) > 0.7
+    # (0.69 of this rope since the refinement iterates on points taken around
+    # the pattern, candidates.icp_subset: 0.7 before; over the benchmark's
+    # test ropes the coverage went 85 -> 86 %, docs/curves.md)
+    assert covered(truth.points[truth.visible][::4], c.points) > 0.65
 
 
 @pytest.mark.parametrize("seed", [0, 3])

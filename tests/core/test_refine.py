@@ -168,3 +168,20 @@ def test_inside_share_and_score_at_the_image_border():
     fit = refine(Pose(1.0, 0.0, 21.0, 29.5), VX, VY, VANG, e, index)
     assert _close(fit.pose, shift)
     assert (fit.score, fit.matched, fit.inside) == (13 / 16, 13, 13 / 16)
+
+
+def test_shift_votes_peak_at_the_shift_that_puts_the_points_on_their_edges():
+    from seahough.core import kernels as K
+    e, index = _image()
+    start = Pose(TRUE.a, TRUE.b, TRUE.tx - 3.0, TRUE.ty + 2.0)
+    v = K.shift_votes(VX, VY, VANG, start.a, start.b, start.tx, start.ty, e.x, e.y, e.angle,
+                      index, 5, math.radians(15), False)
+    assert v.shape == (11, 11)
+    iy, ix = np.unravel_index(int(np.argmax(v)), v.shape)
+    assert (ix - 5, iy - 5) == (3, -2) and v[iy, ix] == len(VX)   # every point, once
+    # a wrong polarity agrees with nothing, unless either polarity is asked for
+    flipped = make_edges(e.x, e.y, e.angle + math.pi, SHAPE)
+    args = (VX, VY, VANG, start.a, start.b, start.tx, start.ty, flipped.x, flipped.y,
+            flipped.angle, flipped.index_map(), 5, math.radians(15))
+    assert K.shift_votes(*args, False).max() == 0
+    assert K.shift_votes(*args, True).max() == len(VX)

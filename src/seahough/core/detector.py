@@ -115,7 +115,7 @@ class Detector:
     >>> found = Detector(Pattern.rectangle(60, 40)).detect(img)
     >>> d = found[0]
     >>> round(d.x), round(d.y), round(d.scale, 1), round(d.angle), d.flags
-    (199, 110, 1.5, 30, ())
+    (200, 110, 1.5, 30, ())
     """
 
     def __init__(self, pattern, scale_range=(0.5, 2.0), angle_range=(0.0, 360.0), *,

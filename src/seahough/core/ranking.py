@@ -11,10 +11,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 
+from . import kernels as K
 from ..geometry import apply_matrix, pose_to_matrix
-from .candidates import Candidate, SearchContext
+from .candidates import Candidate, SearchContext, icp_subset
 from .features import Features
 from .keypoints import edge_points_near_image
 from .nfa import CELL, background, evidence, log10_tests
@@ -31,6 +33,11 @@ FLAG_AMBIGUOUS = "ambiguous"
 #: ranges (by more than 2 % or 1 degree): the object may be there at a size
 #: or turn that was not asked for.
 FLAG_OUTSIDE_RANGE = "outside_search_range"
+#: A candidate's pose may move this share of the pattern's size to a shift
+#: more of its points agree on (:func:`_alternatives`).
+CAPTURE = 0.1
+#: ... and its size change by this factor (:func:`_shifted`).
+RESCALE = 1.12
 
 
 @dataclass
@@ -158,12 +165,12 @@ def _full_radius(factor: float) -> float:
     return max(1.0 / factor, 2.0)
 
 
-def _full_edges(ctx: SearchContext, gray, todo, turns=()):
+def _full_edges(ctx: SearchContext, gray, todo, alternatives):
     """Full-resolution edges near each candidate's pattern points, in a
     box around them: one box around all candidates when that is cheaper
-    than one box each (``turns``: also near the points of each candidate's
-    turned poses, :func:`_try_turns`). Returns ``(box, edges, index)`` per
-    candidate.
+    than one box each (``alternatives``: per candidate, other working-scale
+    fits whose points are gathered too, :func:`_alternatives`). Returns
+    ``(box, edges, index)`` per candidate.
 
     Edges farther from the pattern's points than the refinement's match
     radius plus the distance it may move the pose could never be matched:
@@ -175,9 +182,8 @@ def _full_edges(ctx: SearchContext, gray, todo, turns=()):
         return [None] * len(todo)
     H, W = gray.shape[:2]  # (a colour image: HxWx3)
     pts = []
-    for c in todo:  # (and where its turns would put them: see _try_turns)
-        poses = [c.fit.pose] + [turn_pose(c.fit.pose, t, cx * factor, cy * factor)
-                                for t, cx, cy in turns]
+    for c, alts in zip(todo, alternatives):
+        poses = [c.fit.pose] + [a.pose for a in alts]
         mapped = [_full_pose(q, ctx.features).map(vx, vy) for q in poses]
         pts.append((np.concatenate([m[0] for m in mapped]),
                     np.concatenate([m[1] for m in mapped])))
@@ -237,27 +243,104 @@ def _full_res(ctx: SearchContext, fit: Fit, gray, where=None) -> Fit:
                   score_radius=cfg.match_radius)
 
 
-def _try_turns(ctx: SearchContext, c: Candidate, turns, gray, where) -> None:
-    """Replace the candidate's pose by its pose turned by a near symmetry of
-    the pattern (:mod:`.symmetry`) when that scores highest at full
-    resolution: the part the turn maps onto itself scores alike, so the
-    pattern's other details decide. Each turn starts from the candidate's
-    own pose; a turn outside the searched angles is not tried."""
-    pf, feats, cfg = ctx.pf, ctx.features, ctx.config
-    base, f = c.fit, ctx.factor
+def _capture(ctx: SearchContext) -> int:
+    """How far (working px) :func:`_alternatives` looks for a better shift:
+    :data:`CAPTURE` of the pattern's size at the searched scales, from 2 px
+    to ``Config.search.max_radius``."""
+    size = CAPTURE * ctx.pattern.extent * math.sqrt(ctx.scale_range[0] * ctx.scale_range[1])
+    return int(np.clip(round(size * ctx.factor), 2, max(2, int(ctx.config.search.max_radius))))
+
+
+def _subset(ctx: SearchContext):
+    """The pattern points the candidates' refinement iterates on
+    (``Config.search.icp_points`` of them: :func:`.candidates.icp_subset`)."""
+    pf = ctx.pf
+    sub = icp_subset(pf, ctx.config.search.icp_points, ctx.pattern.is_frame)
+    return tuple(np.ascontiguousarray(v[sub]) for v in (pf.vx, pf.vy, pf.vangle))
+
+
+def _shifted(ctx: SearchContext, pose: Pose, radius: int, points) -> Pose:
+    """``pose`` moved by the shift most of the pattern's ``points`` (vx, vy,
+    vangle) agree on,
+    within ``radius`` working px (:func:`~.kernels.shift_votes`, smoothed
+    over 3 x 3 px), at its scale or :data:`RESCALE` times larger or smaller
+    (a board of nested rings found a ring off); ``pose`` itself when no
+    other does better."""
+    e = ctx.features.edges
+    vx, vy, vang = points
+    tol = math.radians(ctx.config.angle_tolerance)
+    best, at = -1.0, pose
+    scales = (1.0,) if ctx.scale_known else (1.0, RESCALE, 1.0 / RESCALE)
+    for m in scales:
+        q = Pose(pose.a * m, pose.b * m, pose.tx, pose.ty)
+        if m != 1.0 and not ctx.compare.pose_ok(q):
+            continue
+        v = K.shift_votes(vx, vy, vang, float(q.a), float(q.b), float(q.tx),
+                          float(q.ty), e.x, e.y, e.angle, ctx.features.index, int(radius), tol,
+                          ctx.pattern.either)
+        v = cv2.boxFilter(v, -1, (3, 3), normalize=False, borderType=cv2.BORDER_CONSTANT)
+        iy, ix = np.unravel_index(int(np.argmax(v)), v.shape)
+        if m == 1.0:
+            best = float(v[radius, radius])
+        if v[iy, ix] > best:
+            best = float(v[iy, ix])
+            at = Pose(q.a, q.b, q.tx + float(ix - radius), q.ty + float(iy - radius))
+    return at
+
+
+def _alternatives(ctx: SearchContext, c: Candidate, turns) -> list:
+    """Other working-scale fits of a candidate: its own pose and the pose
+    turned by each near symmetry of the pattern (:mod:`.symmetry`; a turn
+    the caller did not search is not tried), each first moved by the shift
+    most of its points agree on (:func:`_shifted`), then refined. The
+    candidates' refinement captures within a pixel or two of where it
+    starts, and a pose a few pixels off can be a local optimum that no
+    refinement leaves: a rectangle with one end on a seabed edge and the
+    other off its own, a board's frame found with its cells a few pixels
+    off (a clean box turned by 30 degrees: a pixel off, its first
+    refinement stopped there). The turned fits, and the candidate's own when
+    it fits better, are returned; :func:`_best_full` judges them at full
+    resolution."""
+    pf, feats, cfg, f = ctx.pf, ctx.features, ctx.config, ctx.factor
+    p = ctx.pattern
     s0, s1 = ctx.scale_range
-    best = None
+    # (a line's pose slides along it, a frame's candidates are measured by
+    # the motion's own checks, motion/pair.py; Config.refine False: the turns
+    # are scored where they fall)
+    move = cfg.refine
+    starts = [] if p.is_line or p.is_frame or not move else [c.fit.pose]
     for theta, cx, cy in turns:
-        start = turn_pose(base.pose, theta, cx * f, cy * f)
-        if ctx.compare.outside_ranges(math.sqrt(s0 * s1), start.angle):
-            continue   # (a turn the caller did not search)
-        # (scored as the candidates are: candidates.find_candidates)
-        work = refine(start, pf.vx, pf.vy, pf.vangle, feats.edges, feats.index,
-                      radii=(1.5, 1.25) if cfg.refine else (), iterations=3,
-                      angle_tol=math.radians(cfg.angle_tolerance), either=ctx.pattern.either,
-                      fix_scale=ctx.scale_known, score_radius=max(1.25, cfg.match_radius * f))
+        start = turn_pose(c.fit.pose, theta, cx * f, cy * f)
+        if not ctx.compare.outside_ranges(math.sqrt(s0 * s1), start.angle):
+            starts.append(start)
+    radius = _capture(ctx)
+    sub = _subset(ctx)
+    out = []
+    for start in starts:
+        own = start is c.fit.pose
+        moved = _shifted(ctx, start, radius, sub) if move else start
+        # (refined on the subset, scored with all the points, as the candidates
+        # are: candidates.find_candidates)
+        kw = dict(angle_tol=math.radians(cfg.angle_tolerance), either=p.either,
+                  fix_scale=ctx.scale_known, fix_angle=ctx.angle_known,
+                  score_radius=max(1.25, cfg.match_radius * f))
+        if cfg.refine:
+            moved = refine(moved, *sub, feats.edges, feats.index, radii=(2.0, 1.5, 1.25),
+                           iterations=3, **kw).pose
+        work = refine(moved, pf.vx, pf.vy, pf.vangle, feats.edges, feats.index, radii=(), **kw)
         if not ctx.compare.pose_ok(work.pose):
             continue
+        if not own or work.score > c.work_score:
+            out.append(work)
+    return out
+
+
+def _best_full(ctx: SearchContext, c: Candidate, alts, gray, where) -> None:
+    """Replace the candidate's pose by an alternative (:func:`_alternatives`)
+    that scores higher at full resolution (the part a turn maps onto itself
+    scores alike, so the pattern's other details decide)."""
+    best = None
+    for work in alts:
         full = _full_res(ctx, work, gray, where)
         if full.score > (c.full.score if best is None else best[1].score):
             best = (work, full)
@@ -279,12 +362,12 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
     pre = max(0.85 * ctx.min_score, 0.6 * best)  # only those that could win
     todo = [c for c in cands if c.work_score >= pre][: ctx.max_results + 2]
     turns = () if ctx.angle_known else ctx.pattern.near_turns(ctx.config)
-    wheres = (_full_edges(ctx, gray, todo, turns) if todo and ctx.factor < 0.999
+    alts = [_alternatives(ctx, c, turns) for c in todo]
+    wheres = (_full_edges(ctx, gray, todo, alts) if todo and ctx.factor < 0.999
               else [None] * len(todo))
-    for c, where in zip(todo, wheres):
+    for c, alt, where in zip(todo, alts, wheres):
         c.full = _full_res(ctx, c.fit, gray, where)
-        if turns:   # (a board's frame: its cells decide the turn)
-            _try_turns(ctx, c, turns, gray, where)
+        _best_full(ctx, c, alt, gray, where)
     # rank by both scores: the working scale's is smoother (less pixel
     # noise, JPEG, snow), the full resolution's sharper
     todo.sort(key=lambda c: -(c.full.score + c.work_score))
