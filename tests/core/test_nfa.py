@@ -102,11 +102,11 @@ def test_a_clear_object_has_a_tiny_nfa_and_max_nfa_filters_it():
     d = seahough.Detector(p).detect(_rectangle_scene())[0]
     assert 0.0 <= d.nfa < 1e-6
     assert d.to_dict()["nfa"] == d.nfa
-    # a caller who accepts less gets only answers of at most that (the box
-    # turned by 180 degrees, the same answer, may count a little stronger),
-    # and nothing when he accepts less than any could be
-    tight = seahough.Detector(p, max_nfa=d.nfa / 10).detect(_rectangle_scene())
-    assert all(t.nfa <= d.nfa / 10 for t in tight)
+    # a caller who accepts exactly that gets it (or the box turned by 180
+    # degrees, the same answer, which may count a little stronger), and one
+    # who accepts less than any answer could be gets nothing
+    same = seahough.Detector(p, max_nfa=d.nfa).detect(_rectangle_scene())
+    assert same and math.hypot(same[0].x - d.x, same[0].y - d.y) < 1.0
     assert seahough.Detector(p, max_nfa=1e-300).detect(_rectangle_scene()) == []
 
 

@@ -53,7 +53,9 @@ STRIDE = 2
 #: apart) are each one. Measured on the tuning part of bench/bench_nfa.py
 #: as 4 edge points (the smallest value at which the NFA holds as a bound);
 #: a thinned edge has |cos a| + |sin a| of them a pixel, 4 / pi on average
-#: over directions, so 4 edge points are pi pixels on average. Counted in
+#: over directions, so 4 edge points are pi pixels on average (a conversion,
+#: not measured again: on object-free photos the NFA alone then let more
+#: chance answers through, docs/nfa.md, thirteenth session). Counted in
 #: pixels, the same edge turned is the same evidence (counted in edge
 #: points, a box turned by 45 degrees had 1.4 times the observations of the
 #: upright one: NFA 1e-78 against 1e-49).

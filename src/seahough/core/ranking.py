@@ -273,8 +273,9 @@ def _shifted(ctx: SearchContext, pose: Pose, radius: int, points) -> Pose:
     scales = (1.0,) if ctx.scale_known else (1.0, RESCALE, 1.0 / RESCALE)
     for m in scales:
         q = Pose(pose.a * m, pose.b * m, pose.tx, pose.ty)
-        if m != 1.0 and not ctx.compare.pose_ok(q):
-            continue
+        if m != 1.0 and (not ctx.compare.pose_ok(q)
+                         or ctx.compare.outside_ranges(q.scale, q.angle)):
+            continue   # (a size the caller did not search is not tried)
         v = K.shift_votes(vx, vy, vang, float(q.a), float(q.b), float(q.tx),
                           float(q.ty), e.x, e.y, e.angle, ctx.features.index, int(radius), tol,
                           ctx.pattern.either)

@@ -95,7 +95,8 @@ def match_points(px, py, pang, a, b, tx, ty, ex, ey, eang, index, radius, ang_to
 def shift_votes(px, py, pang, a, b, tx, ty, ex, ey, eang, index, radius, ang_tol, either):
     """A local vote over shifts of a pose: for each pattern point mapped by the
     pose (as :func:`match_points`), every image edge point of compatible
-    direction within ``radius`` (an integer, pixels) votes for the shift that
+    direction within ``radius`` pixels (an integer; a square: each of x and y
+    within it) votes for the shift that
     would put the point on it, once per point and 1-px cell of shift.
 
     Returns the votes, ``(2 radius + 1, 2 radius + 1)``, cell ``[radius + dy,
