@@ -261,8 +261,7 @@ def _subset(ctx: SearchContext):
 
 def _shifted(ctx: SearchContext, pose: Pose, radius: int, points) -> Pose:
     """``pose`` moved by the shift most of the pattern's ``points`` (vx, vy,
-    vangle) agree on,
-    within ``radius`` working px (:func:`~.kernels.shift_votes`, smoothed
+    vangle) agree on, within ``radius`` working px (:func:`~.kernels.shift_votes`, smoothed
     over 3 x 3 px), at its scale or :data:`RESCALE` times larger or smaller
     (a board of nested rings found a ring off); ``pose`` itself when no
     other does better."""
@@ -308,24 +307,24 @@ def _alternatives(ctx: SearchContext, c: Candidate, turns) -> list:
     # (a line's pose slides along it, a frame's candidates are measured by
     # the motion's own checks, motion/pair.py; Config.refine False: the turns
     # are scored where they fall)
-    move = cfg.refine
-    starts = [] if p.is_line or p.is_frame or not move else [c.fit.pose]
+    starts = [] if p.is_line or p.is_frame or not cfg.refine else [c.fit.pose]
     for theta, cx, cy in turns:
         start = turn_pose(c.fit.pose, theta, cx * f, cy * f)
         if not ctx.compare.outside_ranges(math.sqrt(s0 * s1), start.angle):
             starts.append(start)
     radius = _capture(ctx)
     sub = _subset(ctx)
+    # (refined on the subset, scored with all the points, as the candidates
+    # are: candidates.find_candidates)
+    kw = dict(angle_tol=math.radians(cfg.angle_tolerance), either=p.either,
+              fix_scale=ctx.scale_known, fix_angle=ctx.angle_known,
+              score_radius=max(1.25, cfg.match_radius * f))
     out = []
     for start in starts:
         own = start is c.fit.pose
-        moved = _shifted(ctx, start, radius, sub) if move else start
-        # (refined on the subset, scored with all the points, as the candidates
-        # are: candidates.find_candidates)
-        kw = dict(angle_tol=math.radians(cfg.angle_tolerance), either=p.either,
-                  fix_scale=ctx.scale_known, fix_angle=ctx.angle_known,
-                  score_radius=max(1.25, cfg.match_radius * f))
+        moved = start
         if cfg.refine:
+            moved = _shifted(ctx, start, radius, sub)
             moved = refine(moved, *sub, feats.edges, feats.index, radii=(2.0, 1.5, 1.25),
                            iterations=3, **kw).pose
         work = refine(moved, pf.vx, pf.vy, pf.vangle, feats.edges, feats.index, radii=(), **kw)
