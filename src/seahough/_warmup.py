@@ -146,6 +146,13 @@ def warm_up() -> dict[str, tuple[int, int]]:
     from .motion.perspective import homography_icp
     edges = find_edge_points(compute_gradients(scene.astype(np.float32)), 20)
     homography_icp(np.eye(3), strongest(edges), edges, edges.index_map(), math.radians(20))
+    # full-resolution edges in a narrow band (the finish of a large frame)
+    from .core.keypoints import edge_points_near_image
+    # (of a frame's own levels too, which a pattern holds read-only: a type of its own)
+    levels = scene.astype(np.float32)
+    for writeable in (True, False):
+        levels.flags.writeable = writeable
+        edge_points_near_image(levels, [60.0, 200.0], [50.0, 120.0], 2.0, 20)
     # a short dead-reckoning run (keyframes, priors, the fallbacks, the mosaic)
     with tempfile.TemporaryDirectory() as out:
         try:

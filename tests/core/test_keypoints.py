@@ -8,8 +8,12 @@ import math
 import numpy as np
 import pytest
 
-from seahough.core.keypoints import (contrast_threshold, edge_points_near, find_edge_points,
-                                     local_contrast, select_keypoints)
+import cv2
+
+from seahough.core import keypoints as KP
+from seahough.core.kernels import band_gradients
+from seahough.core.keypoints import (contrast_threshold, edge_points_near, edge_points_near_image,
+                                     find_edge_points, local_contrast, select_keypoints)
 from seahough.core.preprocess import compute_gradients
 
 from .conftest import make_edges, square_image
@@ -98,6 +102,49 @@ def test_edge_points_near_a_point():
     assert sorted(zip(e.ix.tolist(), e.iy.tolist())) == [(6, 10), (6, 11)]
     # points outside the image select nothing
     assert len(edge_points_near(g, [-5.0], [40.0], 2.0, 100.0)) == 0
+
+
+def test_band_gradients_are_opencvs_where_asked_and_zero_elsewhere():
+    # integer grey levels (every photo's): the same numbers as cv2.Scharr with
+    # replicated borders and numpy's magnitude, the image's borders included
+    rng = np.random.default_rng(3)
+    img = rng.integers(0, 256, (37, 53)).astype(np.float32)
+    need = (rng.uniform(size=img.shape) < 0.3).astype(np.uint8)
+    need[0, :] = need[-1, :] = need[:, 0] = need[:, -1] = 1
+    gx, gy, mag = band_gradients(img, need)
+    g = compute_gradients(img)
+    on = need > 0
+    for mine, theirs in ((gx, g.gx), (gy, g.gy), (mag, g.magnitude)):
+        assert np.array_equal(mine[on], theirs[on])
+        assert not mine[~on].any()
+
+
+@pytest.mark.parametrize("levels", ["integer", "fractional"])
+def test_edges_in_a_band_are_those_of_the_whole_images_gradients(monkeypatch, levels):
+    # the full-resolution finish of a frame: few points in a large image, so
+    # its gradients are taken in the band only; the same points as from the
+    # whole image's gradients (positions within float rounding on fractional levels)
+    rng = np.random.default_rng(5)
+    img = cv2.GaussianBlur(rng.uniform(0, 255, (300, 420)).astype(np.float32), (0, 0), 1.5)
+    if levels == "integer":
+        img = np.rint(img)
+    px, py = rng.uniform(0, 419, 40), rng.uniform(0, 299, 40)
+    calls = []
+    monkeypatch.setattr(KP.K, "band_gradients",
+                        lambda *a: calls.append(1) or band_gradients(*a))
+    banded = edge_points_near_image(img, px, py, 2.0, 5.0)
+    assert calls, "the band path was not taken"
+    whole = edge_points_near(compute_gradients(img), px, py, 2.0, 5.0)
+    key = lambda e: np.lexsort((e.ix, e.iy))
+    a, b = key(banded), key(whole)
+    assert len(banded) == len(whole) > 100
+    assert np.array_equal(banded.ix[a], whole.ix[b]) and np.array_equal(banded.iy[a], whole.iy[b])
+    for name in ("x", "y", "angle", "magnitude"):
+        u, v = getattr(banded, name)[a], getattr(whole, name)[b]
+        if levels == "integer":
+            assert np.array_equal(u, v), name
+        else:
+            assert np.allclose(u, v, rtol=1e-5, atol=1e-4), name
 
 
 def test_index_map():

@@ -85,10 +85,13 @@ def find_edge_points(grad: Gradients, min_gradient: float,
     >>> bool(np.allclose(e.x, 14.5, atol=0.01)), len(e)   # every row but the first and last
     (True, 28)
     """
-    phase = cv2.phase(grad.gx, grad.gy)  # [0, 2 pi), vectorised (about 0.3 deg accurate)
     mask = _NO_MASK if mask is None else np.ascontiguousarray(mask, np.uint8)
-    x, y, a, m, ix, iy, index, nx, ny = K.edge_points(grad.magnitude, grad.gx, grad.gy, phase,
-                                                      np.float32(min_gradient), mask, int(row0))
+    x, y, m, ix, iy, index, nx, ny = K.edge_points(grad.magnitude, grad.gx, grad.gy,
+                                                   np.float32(min_gradient), mask, int(row0))
+    # the direction, [0, 2 pi), at the points only (about 0.3 deg accurate;
+    # the same numbers as cv2.phase of the whole image)
+    a = (cv2.phase(grad.gx[iy, ix], grad.gy[iy, ix]).reshape(-1) if ix.size
+         else np.zeros(0, np.float32))
     a[a >= np.float32(2 * np.pi)] = 0.0
     return EdgePoints(x, y, a, m, ix, iy, grad.magnitude.shape, index, nx, ny)
 
@@ -107,7 +110,14 @@ def edge_points_near(grad: Gradients, x, y, radius: float, min_gradient: float,
     >>> sorted(set(e.ix.tolist())), len(e)   # rows 8-12, the maximum's pixel
     ([15], 5)
     """
-    h, w = grad.magnitude.shape
+    band = _band(grad.magnitude.shape, x, y, radius, mask)
+    return find_edge_points(grad, min_gradient, band, row0)
+
+
+def _band(shape, x, y, radius: float, mask=None) -> np.ndarray:
+    """uint8 image of ``shape``: 1 within a square of side ``2 ceil(radius) + 1``
+    around each point ``(x, y)`` and where ``mask`` (optional) is set."""
+    h, w = shape
     band = np.zeros((h, w), np.uint8)
     ix = np.rint(np.asarray(x, float)).astype(np.int64)
     iy = np.rint(np.asarray(y, float)).astype(np.int64)
@@ -117,7 +127,7 @@ def edge_points_near(grad: Gradients, x, y, radius: float, min_gradient: float,
     band = cv2.dilate(band, np.ones((k, k), np.uint8))
     if mask is not None:
         band &= np.asarray(mask, bool).astype(np.uint8)
-    return find_edge_points(grad, min_gradient, band, row0)
+    return band
 
 
 #: Rows of a strip of :func:`edge_points_near_image` (and the rows around
@@ -132,10 +142,13 @@ def edge_points_near_image(gray: np.ndarray, x, y, radius: float, min_gradient: 
     """:func:`edge_points_near` on the full-resolution gradients of ``gray``
     (float32 grey or BGR), computed a strip of ``rows`` rows at a time: the
     same points, without holding a large image's gradients at once (a 12 MP
-    frame's are 200 MB). With ``equalize`` (CLAHE, not local to a strip)
-    the whole image's gradients are taken. ``metric``: a colour image's
-    channel weighting (:func:`.preprocess.colour_metric`), the same for every
-    strip.
+    frame's are 200 MB). A grey strip whose band is a small part of it has
+    its gradients taken in the band only (:data:`BAND_SHARE`;
+    :func:`~seahough.core.kernels.band_gradients`: the same numbers as
+    OpenCV's on integer grey levels, within float rounding on others). With
+    ``equalize`` (CLAHE, not local to a strip) the whole image's gradients
+    are taken. ``metric``: a colour image's channel weighting
+    (:func:`.preprocess.colour_metric`), the same for every strip.
 
     Examples
     --------
@@ -146,16 +159,22 @@ def edge_points_near_image(gray: np.ndarray, x, y, radius: float, min_gradient: 
     >>> def pixels(e):    # (the points by pixel, and their positions)
     ...     o = np.lexsort((e.ix, e.iy))
     ...     return e.ix[o], e.iy[o], e.x[o], e.y[o]
-    >>> for r in (2, 6.75):   # (a band wider than the strips' margin of 3 rows too)
-    ...     a = pixels(edge_points_near(compute_gradients(img), px[::10], py[::10], r, 5))
-    ...     b = pixels(edge_points_near_image(img, px[::10], py[::10], r, 5, rows=16))
-    ...     print(a[0].size > 50, all(np.array_equal(u, v) for u, v in zip(a[:2], b[:2])),
-    ...           all(np.array_equal(u, v) for u, v in zip(a[2:], b[2:])))
-    True True True
-    True True True
+    >>> for levels in (np.rint(img), img):     # integer grey levels, fractional ones
+    ...     for r in (2, 6.75):   # (a band wider than the strips' margin of 3 rows too)
+    ...         a = pixels(edge_points_near(compute_gradients(levels), px[::10], py[::10], r, 5))
+    ...         b = pixels(edge_points_near_image(levels, px[::10], py[::10], r, 5, rows=16))
+    ...         print(a[0].size > 50, all(np.array_equal(u, v) for u, v in zip(a[:2], b[:2])),
+    ...               all(np.array_equal(u, v) for u, v in zip(a[2:], b[2:])),
+    ...               max(float(np.abs(u - v).max()) for u, v in zip(a[2:], b[2:])) < 1e-4)
+    True True True True
+    True True True True
+    True True False True
+    True True True True
     """
     h, w = gray.shape[:2]
     if equalize or h <= rows + 2 * _STRIP_MARGIN:
+        if not equalize:
+            return _edges_near(gray, x, y, radius, min_gradient, mask, 0, metric)
         return edge_points_near(compute_gradients(gray, 1.0, equalize, metric), x, y, radius,
                                 min_gradient, mask)
     x = np.asarray(x, float)
@@ -171,9 +190,9 @@ def edge_points_near_image(gray: np.ndarray, x, y, radius: float, min_gradient: 
         if not near.any():
             continue
         s0, s1 = max(0, y0 - margin), min(h, y1 + margin)
-        grad = compute_gradients(np.ascontiguousarray(gray[s0:s1]), 1.0, False, metric)
         sub = None if mask is None else np.asarray(mask)[s0:s1]
-        e = edge_points_near(grad, x[near], y[near] - s0, radius, min_gradient, sub, row0=s0)
+        e = _edges_near(gray[s0:s1], x[near], y[near] - s0, radius, min_gradient, sub, s0,
+                        metric)
         core = (e.iy >= y0 - s0) & (e.iy < y1 - s0)
         e = e.take(core)
         parts.append((e, s0))
@@ -187,6 +206,27 @@ def edge_points_near_image(gray: np.ndarray, x, y, radius: float, min_gradient: 
                       cat("angle"), cat("magnitude"), cat("ix"),
                       np.concatenate([e.iy + s0 for e, s0 in parts]).astype(parts[0][0].iy.dtype),
                       (h, w), None, cat("nx"), cat("ny"))
+
+
+#: Above this share of an image in the band, its gradients are taken whole
+#: (OpenCV's vectorised filters), else in the band only (:func:`_band_edge_points`).
+BAND_SHARE = 0.25
+
+
+def _edges_near(gray, x, y, radius, min_gradient, mask, row0, metric) -> EdgePoints:
+    """:func:`edge_points_near` of the full-resolution gradients of ``gray``
+    (a strip from ``row0``): a grey image's taken in the band only when it
+    is a small part of the image."""
+    if gray.ndim == 2:
+        band = _band(gray.shape, x, y, radius, mask)
+        need = cv2.dilate(band, np.ones((3, 3), np.uint8))
+        if cv2.countNonZero(need) <= BAND_SHARE * need.size:
+            img = np.ascontiguousarray(gray, np.float32)
+            gx, gy, mag = K.band_gradients(img, need)
+            grad = Gradients(img, gx, gy, mag, 1.0, 1.0, img.shape)
+            return find_edge_points(grad, min_gradient, band, row0)
+    grad = compute_gradients(np.ascontiguousarray(gray), 1.0, False, metric)
+    return edge_points_near(grad, x, y, radius, min_gradient, mask, row0=row0)
 
 
 def contrast_threshold(magnitude: np.ndarray, n: int, bins: int = 1024) -> float:

@@ -462,19 +462,22 @@ def content_box(gray: np.ndarray, margin: int = 2) -> tuple[int, int, int, int]:
     interior = gray[h // 4: 3 * h // 4: 3, w // 4: 3 * w // 4: 3]
     level = float(np.median(interior))
 
-    def depth(lines) -> int:
-        k = 0
-        for line in lines:
-            if not (line.mean() < 0.5 * level or line.std() < 1.0):
-                break
-            k += 1
-        return k
+    def depth(lines: np.ndarray) -> int:
+        # lines: the side's outermost lines as rows, outermost first: how
+        # many of them in a row are dark or flat (most frames: not the first;
+        # else the rest at once, each row reduced as a line of its own)
+        for k0, k1 in ((0, 1), (1, lines.shape[0])):
+            part = np.ascontiguousarray(lines[k0:k1])
+            bad = (part.mean(axis=1) < 0.5 * level) | (part.std(axis=1) < 1.0)
+            if not bad.all():
+                return k0 + int(np.argmin(bad))
+        return int(lines.shape[0])
 
     lim_y, lim_x = max(h // 10, 1), max(w // 10, 1)
-    top = depth(gray[i] for i in range(lim_y))
-    bottom = depth(gray[h - 1 - i] for i in range(lim_y))
-    left = depth(gray[:, i] for i in range(lim_x))
-    right = depth(gray[:, w - 1 - i] for i in range(lim_x))
+    top = depth(gray[:lim_y])
+    bottom = depth(gray[h - lim_y:][::-1])
+    left = depth(gray[:, :lim_x].T)
+    right = depth(gray[:, w - lim_x:][:, ::-1].T)
     box = (left + margin, top + margin, w - right - margin, h - bottom - margin)
     small = max(w // 2, MIN_MOTION_SIDE), max(h // 2, MIN_MOTION_SIDE)
     if box[2] - box[0] < small[0] or box[3] - box[1] < small[1]:

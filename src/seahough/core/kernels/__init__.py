@@ -1,7 +1,7 @@
 """The hot loops, compiled with Numba (``cache=True`` wherever a cache can be
 written), one module a stage. Everything else in the package is numpy/OpenCV.
 
-- :mod:`.edges`: edge points, their chains, segment tracing, spreading points
+- :mod:`.edges`: gradients in a band, edge points, their chains, segment tracing, spreading points
 - :mod:`.voting`: the accumulator's votes and its local maxima
 - :mod:`.matching`: point matching, snapping, ICP, the local vote over shifts
 - :mod:`.evidence`: the a-contrario background model and a pose's counts
@@ -15,11 +15,11 @@ written), one module a stage. Everything else in the package is numpy/OpenCV.
 from ._cache import kernel_cache
 
 with kernel_cache():
-    from .edges import chain_lengths, edge_points, spread_points, trace_segments
+    from .edges import band_gradients, chain_lengths, edge_points, spread_points, trace_segments
     from .evidence import chance_coverage, evidence_counts
     from .matching import homography_icp, icp, match_points, shift_votes, snap_points
     from .voting import MODE_ORIENTED, MODE_POINTS, MODE_SEGMENTS, local_maxima, vote
 
-__all__ = ["chain_lengths", "edge_points", "spread_points", "trace_segments", "chance_coverage", "evidence_counts", "homography_icp", "icp",
+__all__ = ["band_gradients", "chain_lengths", "edge_points", "spread_points", "trace_segments", "chance_coverage", "evidence_counts", "homography_icp", "icp",
            "match_points", "shift_votes",
            "snap_points", "MODE_ORIENTED", "MODE_POINTS", "MODE_SEGMENTS", "local_maxima", "vote"]

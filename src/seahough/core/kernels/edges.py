@@ -41,16 +41,15 @@ def _across(mag, i, w, ggx, ggy):
 
 
 @njit(cache=CACHE, nogil=True)
-def edge_points(mag, gx, gy, phase, floor, mask, row0=0):
+def edge_points(mag, gx, gy, floor, mask, row0=0):
     """Non-maximum suppression across the edge, with sub-pixel position.
 
-    ``phase`` is the gradient direction image (radians, [0, 2 pi)).
-    Returns ``(x, y, angle, magnitude, ix, iy, index, nx, ny)`` of every pixel whose gradient
+    Returns ``(x, y, magnitude, ix, iy, index, nx, ny)`` of every pixel whose gradient
     magnitude is at least ``floor`` and is a local maximum along its gradient
     direction (quantised to 4 directions, as Canny does). The sub-pixel offset
     along that direction comes from a parabola through the three magnitudes.
     ``index`` holds each point's id at its pixel (-1 elsewhere); ``nx, ny``
-    the exact unit gradient (``phase`` agrees with it to about 0.3 degrees). ``mask``
+    the exact unit gradient (the caller takes the points' directions). ``mask``
     (uint8, the image's shape) limits the points to its non-zero pixels; any
     other shape (e.g. 0x0) means the whole image. The magnitudes must be
     finite (neighbours are chosen by multiplying with 0 or 1).
@@ -60,7 +59,6 @@ def edge_points(mag, gx, gy, phase, floor, mask, row0=0):
     fm = np.ascontiguousarray(mag).ravel()
     fgx = np.ascontiguousarray(gx).ravel()
     fgy = np.ascontiguousarray(gy).ravel()
-    fph = np.ascontiguousarray(phase).ravel()
     fmask = np.ascontiguousarray(mask).ravel()
     uw = np.uint64(w)
     # first the kept pixels, compacted without a branch (whether a pixel of
@@ -82,7 +80,6 @@ def edge_points(mag, gx, gy, phase, floor, mask, row0=0):
     findex = index.ravel()
     xs = np.empty(k, np.float32)
     ys = np.empty(k, np.float32)
-    an = np.empty(k, np.float32)
     mg = np.empty(k, np.float32)
     ix = np.empty(k, np.int32)
     iy = np.empty(k, np.int32)
@@ -113,7 +110,6 @@ def edge_points(mag, gx, gy, phase, floor, mask, row0=0):
                 off = -0.5
         xs[j] = x + off * sx
         ys[j] = (y + row0) + off * sy   # (row0: the image's row of this one's 0)
-        an[j] = fph[i]
         mg[j] = m
         ix[j] = x
         iy[j] = y
@@ -121,7 +117,46 @@ def edge_points(mag, gx, gy, phase, floor, mask, row0=0):
         nxs[j] = ggx * inv
         nys[j] = ggy * inv
         findex[i] = j
-    return xs, ys, an, mg, ix, iy, index, nxs, nys
+    return xs, ys, mg, ix, iy, index, nxs, nys
+
+
+@njit(cache=CACHE, nogil=True)
+def band_gradients(img, need):
+    """Scharr gradients of the float32 grey ``img`` at the pixels where
+    ``need`` (uint8, its shape) is set, zero elsewhere: ``(gx, gy, mag)``,
+    the numbers cv2.Scharr (``BORDER_REPLICATE``) and ``sqrt(gx^2 + gy^2)``
+    give there, in the same order of operations (the separable passes of
+    OpenCV's filter: derivative along a row, then the smoothing across, and
+    the other way round), a band's worth of work instead of an image's."""
+    h, w = img.shape
+    gx = np.zeros((h, w), np.float32)
+    gy = np.zeros((h, w), np.float32)
+    mag = np.zeros((h, w), np.float32)
+    three = np.float32(3.0)
+    ten = np.float32(10.0)
+    for y in range(h):
+        ym = max(y - 1, 0)
+        yp = min(y + 1, h - 1)
+        for x in range(w):
+            if need[y, x] == 0:
+                continue
+            xm = max(x - 1, 0)
+            xp = min(x + 1, w - 1)
+            # d/dx: [-1, 0, 1] along each row, then [3, 10, 3] across them
+            r0 = img[ym, xp] - img[ym, xm]
+            r1 = img[y, xp] - img[y, xm]
+            r2 = img[yp, xp] - img[yp, xm]
+            a = r1 * ten + (r0 + r2) * three
+            # d/dy: [3, 10, 3] along each row, then [-1, 0, 1] across them
+            s0 = img[ym, x] * ten + (img[ym, xm] + img[ym, xp]) * three
+            s2 = img[yp, x] * ten + (img[yp, xm] + img[yp, xp]) * three
+            b = s2 - s0
+            gx[y, x] = a
+            gy[y, x] = b
+            m = a * a
+            m += b * b
+            mag[y, x] = np.sqrt(m)
+    return gx, gy, mag
 
 
 @njit(cache=CACHE, nogil=True)
