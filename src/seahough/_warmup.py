@@ -81,7 +81,7 @@ def called_by_kernels() -> set[str]:
     inlined into them): never compiled on their own.
 
     >>> sorted(called_by_kernels())[:2]
-    ['_common._same_direction', 'edges._across']
+    ['_common._placed', '_common._same_direction']
     """
     import inspect
 

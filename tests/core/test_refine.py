@@ -185,3 +185,41 @@ def test_shift_votes_peak_at_the_shift_that_puts_the_points_on_their_edges():
             flipped.angle, flipped.index_map(), 5, math.radians(15))
     assert K.shift_votes(*args, False).max() == 0
     assert K.shift_votes(*args, True).max() == len(VX)
+
+
+def test_the_local_vote_moves_a_pose_a_scale_step_and_a_few_pixels_off_onto_the_shape(monkeypatch):
+    # ranking._shifted on a real search's context: a clean rectangle, and a
+    # start a few pixels off (the box-summed vote's argmax puts it back), and
+    # one also RESCALE smaller (the rescaled vote wins); a known scale never
+    # tries another
+    import cv2
+
+    from seahough import Detector, Pattern
+    from seahough.core import detector as D
+    from seahough.core import ranking
+    img = np.full((240, 320), 60, np.uint8)
+    cv2.rectangle(img, (130, 100), (189, 139), 200, -1)   # 60 x 40, centre (159.5, 119.5)
+    seen = {}
+    real_rank = D.rank
+
+    def spy(ctx, cands, gray, min_confidence):
+        seen["ctx"] = ctx
+        return real_rank(ctx, cands, gray, min_confidence)
+    monkeypatch.setattr(D, "rank", spy)
+    for scales in ((0.7, 1.4), (1.0, 1.0)):
+        (d,) = Detector(Pattern.rectangle(60, 40), scales, (-10, 10)).detect(img)
+        ctx = seen["ctx"]
+        f = ctx.factor
+        truth = Pose.from_params(d.x * f, d.y * f, d.scale, math.radians(d.angle))
+        sub = ranking._subset(ctx)
+        starts = [(Pose(truth.a, truth.b, truth.tx + 3.0, truth.ty - 2.0), 1.0)]
+        if not ctx.scale_known:
+            m = 1.0 / ranking.RESCALE
+            starts.append((Pose(truth.a * m, truth.b * m, truth.tx - 2.0, truth.ty + 1.0), m))
+        for start, _ in starts:
+            moved = ranking._shifted(ctx, start, 6, sub)
+            assert abs(moved.scale / truth.scale - 1) < 0.01, (scales, start, moved)
+            assert math.hypot(moved.tx - truth.tx, moved.ty - truth.ty) <= 1.0, (scales, moved)
+        if ctx.scale_known:   # (a scale the caller did not search is never tried)
+            start = Pose(truth.a / ranking.RESCALE, truth.b / ranking.RESCALE, truth.tx, truth.ty)
+            assert ranking._shifted(ctx, start, 6, sub).scale == pytest.approx(start.scale)

@@ -1,4 +1,5 @@
-"""What the kernels share: the direction test and 2 pi.
+"""What the kernels share: the direction test, a pattern point placed by a
+pose, and 2 pi.
 
 Conventions of every kernel: angles in radians; a gradient angle is
 ``atan2(gy, gx)`` in [0, 2 pi); equation 1 maps a pattern point p to
@@ -34,3 +35,13 @@ def _same_direction(a, b, tol, either):
             da += math.pi
     return abs(da) <= tol
 
+
+@njit(cache=CACHE, nogil=True, inline="always")
+def _placed(px, py, pang, a, b, tx, ty, phi):
+    """A pattern point (``px, py``, gradient ``pang``) mapped by the pose
+    (equation 1; ``phi = atan2(b, a)``): ``(x, y, want)``, ``want`` the image
+    gradient direction it wants, in [0, 2 pi) as the edges' are
+    (_same_direction)."""
+    want = pang - phi
+    want -= TWO_PI * math.floor(want / TWO_PI)
+    return tx + a * px + b * py, ty - b * px + a * py, want

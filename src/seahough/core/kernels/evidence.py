@@ -9,7 +9,7 @@ import numpy as np
 from numba import njit
 
 from ._cache import CACHE
-from ._common import TWO_PI
+from ._common import TWO_PI, _placed
 
 
 @njit(cache=CACHE, nogil=True)
@@ -129,12 +129,9 @@ def evidence_counts(px, py, pang, a, b, tx, ty, ids, cover, ox, oy, cell, h, w, 
     cnt = 0
     k_eff = 0.0
     for i in range(px.shape[0]):
-        x = tx + a * px[i] + b * py[i]
-        y = ty - b * px[i] + a * py[i]
+        x, y, want = _placed(px[i], py[i], pang[i], a, b, tx, ty, phi)
         if x < border or y < border or x > w - 1 - border or y > h - 1 - border:
             continue
-        want = pang[i] - phi
-        want -= TWO_PI * math.floor(want / TWO_PI)
         covers = step * (abs(math.cos(want)) + abs(math.sin(want)))
         n_eff += min(1.0, covers)
         m_eff += min(1.0, step / ell)

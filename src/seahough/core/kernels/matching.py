@@ -10,7 +10,7 @@ import numpy as np
 from numba import njit
 
 from ._cache import CACHE
-from ._common import TWO_PI, _same_direction
+from ._common import TWO_PI, _placed, _same_direction
 
 
 @njit(cache=CACHE, nogil=True, inline="always")
@@ -55,17 +55,6 @@ def _nearest(x, y, want, ex, ey, eang, index, radius, ang_tol, either):
                 bestd = d2
                 best = j
     return best, bestd
-
-
-@njit(cache=CACHE, nogil=True, inline="always")
-def _placed(px, py, pang, a, b, tx, ty, phi):
-    """A pattern point (``px, py``, gradient ``pang``) mapped by the pose
-    (equation 1; ``phi = atan2(b, a)``): ``(x, y, want)``, ``want`` the image
-    gradient direction it wants, in [0, 2 pi) as the edges' are
-    (_same_direction)."""
-    want = pang - phi
-    want -= TWO_PI * math.floor(want / TWO_PI)
-    return tx + a * px + b * py, ty - b * px + a * py, want
 
 
 @njit(cache=CACHE, nogil=True)
