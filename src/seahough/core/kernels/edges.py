@@ -65,17 +65,54 @@ def edge_points(mag, gx, gy, floor, mask, row0=0):
     # textured seabed is kept is a coin toss: as a branch, the loop took over
     # twice as long)
     pos = np.empty(max(h * w, 1), np.int64)
+    prow = np.empty(max(h * w, 1), np.int32)   # (each one's row: no division below)
     k = 0
-    for y in range(1, h - 1):
-        row = np.uint64(y) * uw
-        for x in range(1, w - 1):
-            i = row + np.uint64(x)
-            if masked and fmask[i] == 0:  # (a band around points: long runs either way)
-                continue
-            m = fm[i]
-            m1, m2 = _across(fm, i, uw, fgx[i], fgy[i])
-            pos[k] = i
-            k += np.int64((m >= floor) & (m >= m1) & (m > m2))
+    if masked:
+        for y in range(1, h - 1):
+            row = np.uint64(y) * uw
+            for x in range(1, w - 1):
+                i = row + np.uint64(x)
+                if fmask[i] == 0:  # (a band around points: long runs either way)
+                    continue
+                m = fm[i]
+                m1, m2 = _across(fm, i, uw, fgx[i], fgy[i])
+                pos[k] = i
+                prow[k] = y
+                k += np.int64((m >= floor) & (m >= m1) & (m > m2))
+    else:
+        # the whole image: a row's tests first (a loop the compiler
+        # vectorises: the same arithmetic as _across, on the rows above and
+        # below), then its kept pixels compacted (4x faster than one loop)
+        m2d = np.ascontiguousarray(mag)
+        gx2d = np.ascontiguousarray(gx)
+        gy2d = np.ascontiguousarray(gy)
+        o = np.float32(1.0)
+        flag = np.zeros(w, np.uint8)
+        for y in range(1, h - 1):
+            r0 = m2d[y - 1]
+            r1 = m2d[y]
+            r2 = m2d[y + 1]
+            ax = gx2d[y]
+            ay = gy2d[y]
+            for x in range(1, w - 1):
+                ggx = ax[x]
+                ggy = ay[x]
+                agx = abs(ggx)
+                agy = abs(ggy)
+                fh = np.float32(agy <= _T22 * agx)
+                fv = np.float32(agx <= _T22 * agy)
+                fs = np.float32((ggx > 0) == (ggy > 0))
+                d1 = fs * r0[x - 1] + (o - fs) * r2[x - 1]
+                d2 = fs * r2[x + 1] + (o - fs) * r0[x + 1]
+                m1 = fh * r1[x - 1] + (o - fh) * (fv * r0[x] + (o - fv) * d1)
+                m2 = fh * r1[x + 1] + (o - fh) * (fv * r2[x] + (o - fv) * d2)
+                m = r1[x]
+                flag[x] = (m >= floor) & (m >= m1) & (m > m2)
+            base = y * w
+            for x in range(1, w - 1):
+                pos[k] = base + x
+                prow[k] = y
+                k += np.int64(flag[x])
     index = np.full((h, w), -1, np.int32)
     findex = index.ravel()
     xs = np.empty(k, np.float32)
@@ -87,7 +124,7 @@ def edge_points(mag, gx, gy, floor, mask, row0=0):
     nys = np.empty(k, np.float32)
     for j in range(k):
         i = np.uint64(pos[j])
-        y = np.int64(i // uw)
+        y = np.int64(prow[j])
         x = np.int64(i) - y * w
         m = fm[i]
         ggx = fgx[i]
