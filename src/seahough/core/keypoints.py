@@ -89,9 +89,13 @@ def find_edge_points(grad: Gradients, min_gradient: float,
     x, y, m, ix, iy, index, nx, ny = K.edge_points(grad.magnitude, grad.gx, grad.gy,
                                                    np.float32(min_gradient), mask, int(row0))
     # the direction, [0, 2 pi), at the points only (about 0.3 deg accurate;
-    # the same numbers as cv2.phase of the whole image)
-    a = (cv2.phase(grad.gx[iy, ix], grad.gy[iy, ix]).reshape(-1) if ix.size
-         else np.zeros(0, np.float32))
+    # the same numbers as cv2.phase of the whole image: at least 16 values,
+    # which OpenCV's vector code takes; fewer go through its scalar code,
+    # a few ulp apart)
+    n = ix.size
+    gxp, gyp = np.zeros(max(n, 16), np.float32), np.zeros(max(n, 16), np.float32)
+    gxp[:n], gyp[:n] = grad.gx[iy, ix], grad.gy[iy, ix]
+    a = cv2.phase(gxp, gyp).reshape(-1)[:n].copy()
     a[a >= np.float32(2 * np.pi)] = 0.0
     return EdgePoints(x, y, a, m, ix, iy, grad.magnitude.shape, index, nx, ny)
 
@@ -209,7 +213,7 @@ def edge_points_near_image(gray: np.ndarray, x, y, radius: float, min_gradient: 
 
 
 #: Above this share of an image in the band, its gradients are taken whole
-#: (OpenCV's vectorised filters), else in the band only (:func:`_band_edge_points`).
+#: (OpenCV's vectorised filters), else in the band only (:func:`_edges_near`).
 BAND_SHARE = 0.25
 
 

@@ -65,7 +65,6 @@ def edge_points(mag, gx, gy, floor, mask, row0=0):
     # textured seabed is kept is a coin toss: as a branch, the loop took over
     # twice as long)
     pos = np.empty(max(h * w, 1), np.int64)
-    prow = np.empty(max(h * w, 1), np.int32)   # (each one's row: no division below)
     k = 0
     if masked:
         for y in range(1, h - 1):
@@ -77,7 +76,6 @@ def edge_points(mag, gx, gy, floor, mask, row0=0):
                 m = fm[i]
                 m1, m2 = _across(fm, i, uw, fgx[i], fgy[i])
                 pos[k] = i
-                prow[k] = y
                 k += np.int64((m >= floor) & (m >= m1) & (m > m2))
     else:
         # the whole image: a row's tests first (a loop the compiler
@@ -111,7 +109,6 @@ def edge_points(mag, gx, gy, floor, mask, row0=0):
             base = y * w
             for x in range(1, w - 1):
                 pos[k] = base + x
-                prow[k] = y
                 k += np.int64(flag[x])
     index = np.full((h, w), -1, np.int32)
     findex = index.ravel()
@@ -124,7 +121,7 @@ def edge_points(mag, gx, gy, floor, mask, row0=0):
     nys = np.empty(k, np.float32)
     for j in range(k):
         i = np.uint64(pos[j])
-        y = np.int64(prow[j])
+        y = np.int64(i // uw)
         x = np.int64(i) - y * w
         m = fm[i]
         ggx = fgx[i]
@@ -161,10 +158,12 @@ def edge_points(mag, gx, gy, floor, mask, row0=0):
 def band_gradients(img, need):
     """Scharr gradients of the float32 grey ``img`` at the pixels where
     ``need`` (uint8, its shape) is set, zero elsewhere: ``(gx, gy, mag)``,
-    the numbers cv2.Scharr (``BORDER_REPLICATE``) and ``sqrt(gx^2 + gy^2)``
-    give there, in the same order of operations (the separable passes of
-    OpenCV's filter: derivative along a row, then the smoothing across, and
-    the other way round), a band's worth of work instead of an image's."""
+    as cv2.Scharr (``BORDER_REPLICATE``) and ``sqrt(gx^2 + gy^2)`` compute
+    them, in the order of OpenCV's separable passes (derivative along a row,
+    then the smoothing across, and the other way round): the same numbers on
+    integer grey levels, within float rounding on fractional ones (OpenCV's
+    vector code fuses some of its multiplications and additions). A band's
+    worth of work instead of an image's."""
     h, w = img.shape
     gx = np.zeros((h, w), np.float32)
     gy = np.zeros((h, w), np.float32)
