@@ -134,7 +134,11 @@ def test_real_pairs_benchmark_quick(tmp_path):
     assert "Machine:" in text and "Command:" in text and "Date:" in text
     assert "Split: tune part = sparus_auv_seabed, skerki_mud_pair" in text
     targets = _rows(_section(text, "## Targets"))[1:]
-    assert len(targets) == 5 and all(r[-1] in ("met", "**missed**") for r in targets)
+    assert len(targets) == 6 and all(r[-1] in ("met", "**missed**") for r in targets)
+    # issue 13's time row: each test sequence, seahough's ms against ORB+RANSAC's
+    # (a quick run has half size only)
+    assert targets[-1][0].startswith("median CPU ms a pair from scratch, half size")
+    assert len(re.findall(r"\d+\.\d / \d+\.\d", targets[-1][2])) == 3
     methods = _rows(_section(text, "## Methods"))
     head, body = methods[0], methods[1:]
     col = {h: i for i, h in enumerate(head)}
