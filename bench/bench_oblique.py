@@ -29,7 +29,9 @@ motion over the overlap, less the best similarity's (the parallax), which
 does not favour either definition. Each sequence has 4 frames: 3 consecutive pairs and 2 pairs one
 frame apart; a loop (frames k, k+1, k+2) is *closed* when its three pairs
 are answered, and *consistent* when (k+1 -> k+2) o (k -> k+1) agrees with
-k -> k+2 within 2 % of the diagonal.
+k -> k+2 within 2 % of the diagonal. Dead reckoning: ``run_odometry`` over
+each sequence's 4 frames at its defaults, its steps (``pair_matrix``)
+against the best similarity of each consecutive pair.
 
 Split: tune part = the tiled floors of seeds 0-5 and dtu_seabed_pair/scene1.png
 (seeds 0-1); test part = the tiled floors of seeds 100-105,
@@ -49,6 +51,7 @@ from __future__ import annotations
 
 import math
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -58,6 +61,7 @@ from _common import page_head, page_parser, publish  # noqa: E402
 import numpy as np  # noqa: E402
 
 import bench_real_pairs as R  # noqa: E402
+import seahough  # noqa: E402
 import seahough.motion.pair as P  # noqa: E402
 from seahough import sim  # noqa: E402
 from seahough.geometry import compose  # noqa: E402
@@ -132,7 +136,48 @@ def measure(source: str, part: str, seed: int, size=(720, 1280)) -> dict:
                 ans[name].update(nfa=float(r.nfa), confidence=float(r.confidence))
         pairs[(i, j)] = dict(truth=m, parallax=parallax, ans=ans)
     return dict(source=source, kind=label(source), seed=seed, part=part, shape=shape,
-                tilt=truth.tilt, pairs=pairs)
+                tilt=truth.tilt, pairs=pairs, odometry=dead_reckoning(frames, truth))
+
+
+def dead_reckoning(frames, truth) -> dict:
+    """``run_odometry`` over the sequence (frames in memory, no mosaic, its
+    defaults): the consecutive pairs it measured, and each step (a measured
+    row's ``pair_matrix``: previous -> current frame) against the best
+    similarity of the true motion, as a share of the diagonal, with its NFA."""
+    with tempfile.TemporaryDirectory() as tmp:
+        t = time.process_time()
+        rows = seahough.run_odometry(frames, tmp, mosaic=False, progress=False).rows
+        ms = 1000 * (time.process_time() - t) / len(frames)
+    shape = frames[0].shape[:2]
+    steps = []
+    for a, b in zip(rows, rows[1:]):   # (a step from an assumed pose is not measured)
+        if (b["status"] != "measured" or a["status"] not in ("origin", "measured")
+                or b.get("pair_matrix") is None):
+            continue
+        m, _ = truth.similarity(a["index"], b["index"])
+        step = np.reshape(np.asarray(b["pair_matrix"], float), (2, 3))
+        steps.append((R.corner_error(step, m, shape) / R.diagonal(shape), float(b["nfa"])))
+    return dict(pairs=len(rows) - 1, measured=sum(r["status"] == "measured" for r in rows[1:]),
+                steps=steps, ms=ms)
+
+
+def odometry_rows(recs) -> list:
+    """Per part and floor: pairs measured, the steps' median error, within
+    RIGHT, off by more than WRONG (and of those, at NFA <= 1), CPU ms a frame."""
+    rows = []
+    for part in ("test", "tune"):
+        for kind in sorted({r["kind"] for r in recs if r["part"] == part}):
+            sub = [r["odometry"] for r in recs if r["part"] == part and r["kind"] == kind]
+            errs = [e for o in sub for e, _ in o["steps"]]
+            off = [(e, nfa) for o in sub for e, nfa in o["steps"] if e > WRONG]
+            rows.append([part, kind, R.pct(sum(o["measured"] for o in sub),
+                                           sum(o["pairs"] for o in sub)),
+                         R.fnum(100 * float(np.median(errs)) if errs else math.nan),
+                         R.pct(sum(e <= RIGHT for e in errs), len(errs)),
+                         f"{len(off)} (NFA <= {R.MAX_NFA:g}: "
+                         f"{sum(nfa <= R.MAX_NFA for _, nfa in off)})",
+                         R.fnum(float(np.median([o["ms"] for o in sub])), 1)])
+    return rows
 
 
 def loop_cells(recs, method):
@@ -206,6 +251,15 @@ def page(recs, seconds: float, quick: bool) -> str:
                 rows.append([kind, method] + pair_cells([r for r in sub if r["kind"] == kind],
                                                         method))
         lines += R.table(["floor", "method"] + HEAD, rows) + [""]
+    lines += ["## Dead reckoning (run_odometry at its defaults, native size)", "",
+              "Each sequence's 4 frames; a step is a measured row's pair_matrix (previous -> "
+              "current frame; the previous frame measured too), its error against the best similarity of the true motion of the "
+              "pair. The dead reckoning measures most steps against a keyframe a few frames "
+              "back: for a camera that looks ahead, similarities of different overlaps do not "
+              "compose, so its steps can differ from the pairs measured one by one (above).", ""]
+    lines += R.table(["part", "floor", "pairs measured", "median step error % diag",
+                      f"steps within {100 * RIGHT:.0f} %", f"steps off > {100 * WRONG:.0f} %",
+                      "CPU ms a frame (median)"], odometry_rows(recs)) + [""]
     lines += ["## The pairs", "",
               "Perspective and parallax the best similarity leaves (RMS px), and seahough's "
               "answer (error % of the diagonal, confidence, NFA; '-' = declined).", ""]

@@ -202,6 +202,17 @@ def test_oblique_benchmark_quick(tmp_path):
             assert loops.group(2) == "2" and int(loops.group(1)) <= 2, r
     pairs = _rows(_section(text, "## The pairs"))[1:]
     assert len(pairs) == 10 and {r[0] for r in pairs} == {"test", "tune"}
+    # the dead reckoning over each sequence: 3 consecutive pairs, steps that add up
+    odo = _rows(_section(text, "## Dead reckoning"))
+    col = {h: i for i, h in enumerate(odo[0])}
+    assert [r[0] for r in odo[1:]] == ["test", "tune"]
+    for r in odo[1:]:
+        measured = re.match(r"(\d+)/(\d+)", r[col["pairs measured"]])
+        assert measured.group(2) == "3" and int(measured.group(1)) <= 3, r
+        within = re.match(r"(\d+)/(\d+)", r[col["steps within 2 %"]])
+        assert int(within.group(2)) <= int(measured.group(1)), r
+        off = re.match(r"(\d+) \(NFA <= 1: (\d+)\)", r[col["steps off > 5 %"]])
+        assert int(off.group(2)) <= int(off.group(1)) <= int(within.group(2)), r
 
 
 def test_small_patch_benchmark_quick(tmp_path):
