@@ -221,8 +221,8 @@ def _edges_near(gray, x, y, radius, min_gradient, mask, row0, metric) -> EdgePoi
     """:func:`edge_points_near` of the full-resolution gradients of ``gray``
     (a strip from ``row0``): a grey image's taken in the band only when it
     is a small part of the image."""
+    band = _band(gray.shape[:2], x, y, radius, mask)
     if gray.ndim == 2:
-        band = _band(gray.shape, x, y, radius, mask)
         need = cv2.dilate(band, np.ones((3, 3), np.uint8))
         if cv2.countNonZero(need) <= BAND_SHARE * need.size:
             img = np.ascontiguousarray(gray, np.float32)
@@ -230,7 +230,7 @@ def _edges_near(gray, x, y, radius, min_gradient, mask, row0, metric) -> EdgePoi
             grad = Gradients(img, gx, gy, mag, 1.0, 1.0, img.shape)
             return find_edge_points(grad, min_gradient, band, row0)
     grad = compute_gradients(np.ascontiguousarray(gray), 1.0, False, metric)
-    return edge_points_near(grad, x, y, radius, min_gradient, mask, row0=row0)
+    return find_edge_points(grad, min_gradient, band, row0)
 
 
 def contrast_threshold(magnitude: np.ndarray, n: int, bins: int = 1024) -> float:
