@@ -78,33 +78,15 @@ def edge_points(mag, gx, gy, floor, mask, row0=0):
                 pos[k] = i
                 k += np.int64((m >= floor) & (m >= m1) & (m > m2))
     else:
-        # the whole image: a row's tests first (a loop the compiler
-        # vectorises: the same arithmetic as _across, on the rows above and
-        # below), then its kept pixels compacted (4x faster than one loop)
-        m2d = np.ascontiguousarray(mag)
-        gx2d = np.ascontiguousarray(gx)
-        gy2d = np.ascontiguousarray(gy)
-        o = np.float32(1.0)
+        # the whole image: a row's tests first, then its kept pixels
+        # compacted (two loops: in one, the kernel took 1.5-1.8x as long)
         flag = np.zeros(w, np.uint8)
         for y in range(1, h - 1):
-            r0 = m2d[y - 1]
-            r1 = m2d[y]
-            r2 = m2d[y + 1]
-            ax = gx2d[y]
-            ay = gy2d[y]
+            row = np.uint64(y) * uw
             for x in range(1, w - 1):
-                ggx = ax[x]
-                ggy = ay[x]
-                agx = abs(ggx)
-                agy = abs(ggy)
-                fh = np.float32(agy <= _T22 * agx)
-                fv = np.float32(agx <= _T22 * agy)
-                fs = np.float32((ggx > 0) == (ggy > 0))
-                d1 = fs * r0[x - 1] + (o - fs) * r2[x - 1]
-                d2 = fs * r2[x + 1] + (o - fs) * r0[x + 1]
-                m1 = fh * r1[x - 1] + (o - fh) * (fv * r0[x] + (o - fv) * d1)
-                m2 = fh * r1[x + 1] + (o - fh) * (fv * r2[x] + (o - fv) * d2)
-                m = r1[x]
+                i = row + np.uint64(x)
+                m = fm[i]
+                m1, m2 = _across(fm, i, uw, fgx[i], fgy[i])
                 flag[x] = (m >= floor) & (m >= m1) & (m > m2)
             base = y * w
             for x in range(1, w - 1):
