@@ -213,6 +213,16 @@ def test_oblique_benchmark_quick(tmp_path):
         assert int(within.group(2)) <= int(measured.group(1)), r
         off = re.match(r"(\d+) \(NFA <= 1: (\d+)\)", r[col["steps off > 5 %"]])
         assert int(off.group(2)) <= int(off.group(1)) <= int(within.group(2)), r
+    # the longer runs over the tiled floors (5 frames in a quick run: 4 pairs)
+    long = _rows(_section(text, "## Longer runs over the tiled floors (5 frames)"))
+    col = {h: i for i, h in enumerate(long[0])}
+    assert [r[0] for r in long[1:]] == ["test", "tune"]
+    for r in long[1:]:
+        assert r[1] == "tiled floor, 5 frames", r
+        measured = re.match(r"(\d+)/(\d+)", r[col["pairs measured"]])
+        assert measured.group(2) == "4" and int(measured.group(1)) <= 4, r
+        within = re.match(r"(\d+)/(\d+)", r[col["steps within 2 %"]])
+        assert int(within.group(2)) <= int(measured.group(1)), r
 
 
 def test_small_patch_benchmark_quick(tmp_path):
