@@ -14,7 +14,6 @@ from seahough.core import kernels as K
 from seahough.core.keypoints import find_edge_points
 from seahough.core.preprocess import compute_gradients
 from seahough.errors import ParameterError
-from seahough.geometry import compose
 from seahough.motion import pair as PAIR
 from seahough.motion import perspective as PP
 from seahough.motion import pyramid as PY
@@ -236,8 +235,11 @@ def test_similarity_of_a_homography_is_its_least_squares_fit():
 # the motion of an oblique pair
 # ----------------------------------------------------------------------------
 
-def _bench_render(source, seed):
-    """A sequence of bench/bench_oblique.py (its render: 4 frames, 1280x720)."""
+@pytest.fixture(scope="module")
+def pool_pair():
+    # the tune part's tiled floor of bench/bench_oblique.py, seed 4, frames 1 -> 2: the
+    # similarity alone is declined (confidence 0.14); as homographies the
+    # true motion explains 0.77 of the frame's edges, its look-alikes 0.2
     import importlib.util
     import pathlib
     path = pathlib.Path(__file__).resolve().parent.parent / "bench" / "bench_oblique.py"
@@ -247,17 +249,9 @@ def _bench_render(source, seed):
     sys.path.insert(0, str(path.parent))
     try:
         spec.loader.exec_module(B)
-        return B.render(source, seed)
+        frames, truth = B.render("tiles", 4)
     finally:
         sys.path.remove(str(path.parent))
-
-
-@pytest.fixture(scope="module")
-def pool_pair():
-    # the tune part's tiled floor of bench/bench_oblique.py, seed 4, frames 1 -> 2: the
-    # similarity alone is declined (confidence 0.14); as homographies the
-    # true motion explains 0.77 of the frame's edges, its look-alikes 0.2
-    frames, truth = _bench_render("tiles", 4)
     return frames[1], frames[2], truth.similarity(1, 2)[0]
 
 
@@ -483,59 +477,3 @@ def test_a_coarse_vote_less_decided_than_the_vote_does_not_overrule_it(pool_pair
     got = PAIR.measure_pair(p, seahough.to_gray(b), (0.8, 1.25), (-30, 30), region,
                             min_score=0.15, min_confidence=0.15, config=cfg)
     assert got is not None and got.homography is None and np.allclose(got.matrix, d.matrix)
-
-
-# ----------------------------------------------------------------------------
-# dead reckoning with a camera that looks ahead
-# ----------------------------------------------------------------------------
-
-def test_dead_reckoning_measures_an_oblique_floor_as_a_perspective_change(tmp_path, monkeypatch):
-    # bench/bench_oblique.py's tune part, tiled floor seed 1: the similarity
-    # searches measure 1 of its 3 pairs; checked as a perspective change, the
-    # searches against the last measured frame measure all three, each step
-    # within 2 % of the diagonal of the true motion's best similarity
-    from seahough.motion import searcher as SE
-    frames, truth = _bench_render("tiles", 1)
-    shape = frames[0].shape[:2]
-    d = math.hypot(*shape)
-
-    def run(out):
-        rows = seahough.run_odometry(frames, tmp_path / out, mosaic=False, progress=False).rows
-        errs = [_corner_error(np.reshape(b["pair_matrix"], (2, 3)),
-                              truth.similarity(a["index"], b["index"])[0], shape) / d
-                for a, b in zip(rows, rows[1:])
-                if b["status"] == "measured" and a["status"] != "assumed"]
-        return rows, errs
-
-    rows, errs = run("with")
-    assert [r["status"] for r in rows[1:]] == ["measured"] * 3, rows
-    assert any(r["method"].endswith("+perspective") for r in rows) and len(errs) == 3
-    assert max(errs) < 0.02, errs
-    # without the perspective checks (the searches as before them)
-    real = SE.Searcher.measure
-
-    def similarity_only(self, *args, **kw):
-        return real(self, *args, **{**kw, "perspective": False})
-
-    monkeypatch.setattr(SE.Searcher, "measure", similarity_only)
-    rows, _ = run("without")
-    assert sum(r["status"] == "measured" for r in rows[1:]) <= 1
-
-
-def test_a_frame_measured_as_a_perspective_change_becomes_the_keyframe():
-    # its similarity (the least-squares fit of a homography over the frame)
-    # does not compose with the vote's against an older keyframe
-    from seahough.config import OdometryTuning
-    from seahough.motion.state import State, advance
-    shift = [[1.0, 0.0, -10.0], [0.0, 1.0, 0.0]]
-    # (frame 2 against the keyframe 0, or against the last measured frame 1)
-    for method, ref, key in (("prior", 0, 0), ("previous", 1, 1), ("previous+perspective", 1, 2),
-                             ("wide+perspective", 1, 2), ("full+perspective", 0, 2)):
-        st = State(shape=(240, 320))
-        advance(st, {"index": 0, "status": "origin", "_cum": np.eye(2, 3)}, OdometryTuning())
-        cum = np.eye(2, 3)
-        for i, m, r in ((1, "prior", 0), (2, method, ref)):
-            cum = compose(np.array(shift), cum)
-            advance(st, {"index": i, "status": "measured", "_cum": cum, "ref": r, "score": 0.5,
-                         "overlap": 0.9, "method": m}, OdometryTuning())
-        assert st.key == key, method

@@ -6,9 +6,7 @@ every consecutive pair. The motion of the last frames predicts where the
 keyframe lies in the next one, so the search is narrowed to a small window of
 position, rotation and scale around that prediction (the fast path); when
 that fails, the full search against the keyframe, then against the previous
-frame, then a wider search against the last measured frame take over (a
-search against the previous or the last measured frame is also checked as a
-perspective change: a camera that looks ahead, a tiled floor). A
+frame, then a wider search against the last measured frame take over. A
 pair that still cannot be measured is flagged with what happened, and its
 pose is assumed, as it says: the last measured pose carried on by the last
 velocity, never passed off as measured (nor stacked in the mosaic).
@@ -160,34 +158,13 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     2. ``full``: against the keyframe, with the whole ``scale_range`` /
        ``angle_range`` around the last measured motion and +-half a frame.
     3. ``previous``: against the previous readable frame (when it is not
-       the keyframe), full search; it then becomes the keyframe (the
-       current frame does, after a ``+perspective`` answer, below).
+       the keyframe), full search; it then becomes the keyframe.
     4. ``wide``: the last try before the pair is flagged: against the last
        measured frame, with twice the full search's shift region (+-a whole
        frame) and the ranges widened as for twice the frames (``scale_range``
        squared, ``angle_range`` doubled; known quantities stay known); it
-       then becomes the keyframe (or the current frame, as for 3). A sudden
-       jump, turn or change of altitude beyond the per-frame ranges is
-       measured here (or already by ``previous``'s homography checks, which
-       are not held to the ranges), not flagged.
-
-    A search against the previous or the last measured frame (``full`` when
-    the keyframe is the last measured frame, ``previous``, ``wide``, and the
-    check of a doubtful keyframe measurement below) measures the step
-    directly, and gets the checks
-    :func:`~seahough.estimate_motion` gives a vote that cannot vouch for its
-    answer (the pair voted again coarse to fine, the vote's best candidates
-    refitted as homographies): a camera that looks ahead sees the floor
-    change by a perspective change, and over a tiled floor a look-alike a
-    tile on matches almost as well as the true motion. When one of those
-    checks gives the answer, ``+perspective`` is appended to the method
-    (``"wide+perspective"``): the motion is the
-    similarity that fits the homography best over the frame, which does not
-    compose with the vote's similarities against an older keyframe, so the
-    frame becomes the keyframe. (Searches against an older keyframe do not
-    get them: over the real tiled pool they confirmed look-alikes a tile or
-    two off. The previous frame may be an assumed one: its step is measured
-    all the same.)
+       then becomes the keyframe. A sudden jump, turn or change of altitude
+       beyond the per-frame ranges is measured here, not flagged.
 
     A keyframe measurement of confidence below 0.35 (an old keyframe, or a
     look-alike of it: a tile or a ripple one period on) is checked by a full
@@ -195,8 +172,7 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     replaces it when the two differ by more than 2 working pixels at the
     frame's corners (more than a measurement's noise: an aging keyframe of
     a scene in relief drifts too) and it is more confident. It is then
-    reported as method ``previous`` (or ``previous+perspective``), with
-    ``ref`` the frame it was measured
+    reported as method ``previous``, with ``ref`` the frame it was measured
     against (the last measured one, which is the previous frame unless
     frames in between were assumed).
 
@@ -206,7 +182,7 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     The current frame becomes the keyframe when the next frame is predicted
     to overlap the keyframe by less than 60 %, or when the keyframe's edges
     match less than 0.6 times as well as at its first measurement (the
-    scene's look changed), and after a ``+perspective`` answer. Flags (a frame with flags is a pair that could
+    scene's look changed). Flags (a frame with flags is a pair that could
     not be measured or a frame that could not be read; docs/odometry.md):
 
     - ``unreadable: <reason>``: missing, corrupt, truncated, wrong size,
@@ -444,18 +420,17 @@ def _measure_frame(row, i, gray, feats, st: State, searcher: _Searcher, load):
         reasons.append(why)
     if res is None:
         base = compose(st.meas_cum, invert_matrix(st.key_cum))
-        res, why = searcher.measure(key, gray, feats, None, base, n, "full", ref_rate,
-                                    perspective=st.key == st.meas)
+        res, why = searcher.measure(key, gray, feats, None, base, n, "full", ref_rate)
         reasons.append(why)
     if res is None and st.prev is not None and st.prev != st.key:
         prev = load(st.prev)
         res, why = searcher.measure(prev, gray, feats, None, _IDENTITY, i - st.prev, "previous",
-                                    ref_rate, perspective=True)
+                                    ref_rate)
         reasons.append(why)
     if res is None:
         # the last attempt: the last measured frame, a wider shift region and wider ranges
         res, why = searcher.measure(load(st.meas), gray, feats, None, _IDENTITY, n, "wide",
-                                    ref_rate, widen=WIDEN, perspective=True)
+                                    ref_rate, widen=WIDEN)
         reasons.append(why)
     if res is None:
         _assume(row, st, "low_confidence" if "low_confidence" in reasons else (
@@ -499,7 +474,7 @@ def _checked(res, i, gray, feats, st: State, searcher: _Searcher, load, ref_rate
     # runner-up to be measured against (on the tiled pool it confirmed itself)
     n = i - st.meas
     check, _ = searcher.measure(load(st.meas), gray, feats, None, _IDENTITY, n, "previous",
-                                ref_rate, perspective=True)
+                                ref_rate)
     if check is None or check.confidence <= res.confidence:
         return res
     implied = compose(res.matrix, compose(st.key_cum, invert_matrix(st.meas_cum)))

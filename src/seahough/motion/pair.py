@@ -272,15 +272,12 @@ class PairMeasure:
     nfa: float
     parallax: float = float("nan")
     homography: np.ndarray | None = None
-    #: the motion is the similarity that fits a homography best over the frame
-    #: (coarse to fine, the candidates refitted as homographies), not a vote's pose
-    perspective: bool = False
 
     @classmethod
-    def of(cls, check, perspective: bool = False) -> "PairMeasure":
+    def of(cls, check) -> "PairMeasure":
         """A check's measurement (:class:`~.parallax.LocalCheck`)."""
         return cls(check.matrix, check.confidence, check.score, check.nfa, check.parallax,
-                   check.homography, perspective)
+                   check.homography)
 
     def pose(self, origin) -> tuple[float, float, float, float]:
         """``(x, y, scale, angle)`` of the previous frame's ``origin``."""
@@ -325,12 +322,12 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
     the two disagree (:data:`~seahough.motion.pyramid.AGREE`) and the coarse
     vote is at least as confident, both are refitted as homographies, and
     the one that explains more of the frame's edges is reported (as a
-    homography, whichever it is). The dead reckoning asks for neither check
-    (``perspective=False``, ``coarse=False``) but in its searches against the
-    previous or the last measured frame: over the real tiled pool, in
-    searches against a keyframe a few frames back, the check of the
-    candidates confirmed look-alikes a tile or two off (28 and 85 px at
-    confidence 0.39-0.41, where the adjacent pairs agree on a few px).
+    homography, whichever it is). The dead reckoning does not ask for the
+    check of the candidates
+    (``perspective=False``): over the real tiled pool, in searches against a
+    keyframe a few frames back, it confirmed look-alikes a tile or two off
+    (28 and 85 px at confidence 0.39-0.41, where the adjacent pairs agree on
+    a few px).
     """
     det = Detector(pattern, scale_range, angle_range, config=config, max_results=1,
                    min_score=min_score, min_confidence=0.0, max_nfa=math.inf,
@@ -385,7 +382,7 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
         fine = check_perspective(pattern, res, d, region, scale_range, angle_range, config,
                                  gray=gray, frame=frame)
     if fine is not None and fine.confidence >= min_confidence and fine.score >= min_score:
-        return PairMeasure.of(fine, perspective=True)
+        return PairMeasure.of(fine)
     return own
 
 
@@ -408,7 +405,7 @@ def _explains_more(vote, own, d, pattern, gray, scale_range, angle_range, region
     # coarse vote is wrong, the finish was half of the 120 ms this costs)
     fine = judge_homography(H, conf, score, pattern, res, region, scale_range, angle_range,
                             config, points)
-    return None if fine is None else PairMeasure.of(fine, perspective=True)
+    return None if fine is None else PairMeasure.of(fine)
 
 
 def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),

@@ -37,19 +37,14 @@ __all__ = ["RunFolder", "run_settings", "settings_hash", "settings_changes", "sa
 
 #: Bumped when the rows a run writes change for the same settings (2: a pair
 #: that cannot be measured gets a ``wide`` last try, and an assumed pose
-#: carries the last velocity on; format 1 assumed zero motion; 3: searches
-#: against the previous or the last measured frame checked as a perspective
-#: change): a run
-#: of another format is not continued by ``resume``.
-SETTINGS_FORMAT = 3
+#: carries the last velocity on; format 1 assumed zero motion): a run of
+#: another format is not continued by ``resume``.
+SETTINGS_FORMAT = 2
 #: What changed in the rows at each format (for the message refusing to
 #: resume a run of an earlier one).
 FORMAT_CHANGES = {2: "frames whose motion could not be measured now get a wider last search, "
                      "and their assumed pose carries the last velocity on instead of zero "
-                     "motion",
-                  3: "searches against the previous or the last measured frame are also "
-                     "checked as a perspective change (a camera that looks ahead, a tiled "
-                     "floor), and a frame so measured becomes the keyframe"}
+                     "motion"}
 LOCK_NAME = ".seahough.lock"
 OUTPUTS = ("summary.json", "mosaic.png", "trajectory.png")
 

@@ -1,8 +1,6 @@
 """The searches a dead-reckoning frame gets (:func:`~seahough.run_odometry`'s
-steps ``prior``, ``full``, ``previous`` and ``wide``, with ``+perspective``
-appended when a search against the previous or the last measured frame is
-answered by its homography checks), on frames cropped to their content box,
-each judged by the run's acceptance checks.
+steps ``prior``, ``full``, ``previous`` and ``wide``), on frames cropped to
+their content box, each judged by the run's acceptance checks.
 
 A pair that is not accepted comes back with the reason it failed:
 
@@ -30,7 +28,7 @@ from ..errors import SeahoughError
 from ..geometry import (angle_difference, apply_matrix, frame_centre, matrix_to_pose,
                         overlap, shift_origin, wrap_angle)
 from .pair import frame_factor, frame_features, measure_pair
-from .state import PERSPECTIVE, Frame
+from .state import Frame
 
 __all__ = ["Measure", "Searcher", "REASONS", "WIDEN"]
 
@@ -85,24 +83,20 @@ class Searcher:
         """Features of a cropped frame."""
         return frame_features(gray, self.cfg, self.s_range)
 
-    def _run(self, pattern, gray, feats, s_range, a_range, region, cfg, rescue=True,
-             perspective=False):
+    def _run(self, pattern, gray, feats, s_range, a_range, region, cfg, rescue=True):
         (s0, s1), (a0, a1) = s_range, a_range
         s_range = (max(s0, 1e-3), max(s1, s0, 1e-3))
         if s_range[1] / s_range[0] > 60:
             s_range = (s_range[0], s_range[0] * 60)
         # (neither the check of the candidates, measure_pair's docstring, nor coarse
-        # to fine, motion/pyramid.py, unless ``perspective``: a search against the
-        # previous or the last measured frame, whose answer by them makes the frame
-        # the keyframe. Allowed in every search, on the real tiled pool they measured
-        # 11 of 11 pairs, against 10, but 4 steps, their least-squares similarities
-        # composed with the vote's against a keyframe, moved 35-60 px from the
-        # reference where they had been 10-31 px)
+        # to fine, motion/pyramid.py: on the real tiled pool it measured 11 of 11
+        # pairs, against 10, but 4 steps, its least-squares similarities composed
+        # with the vote's against a keyframe, moved 35-60 px from the reference
+        # where they had been 10-31 px)
         return measure_pair(pattern, gray, s_range, (a0, a1), region,
                             min_score=self.tuning.min_score,
                             min_confidence=self.tuning.min_confidence, config=cfg,
-                            features=feats, rescue=rescue, perspective=perspective,
-                            coarse=perspective)
+                            features=feats, rescue=rescue, perspective=False, coarse=False)
 
     def ranges_around(self, base, n: int, widen: int = 1):
         """Scale and angle ranges of the user's per-pair ranges, ``n`` frames
@@ -143,18 +137,14 @@ class Searcher:
         return sr, ar
 
     def measure(self, ref: Frame, gray, feats, predicted, base, n: int, method: str,
-                ref_rate: float | None = None, widen: int = 1, perspective: bool = False):
+                ref_rate: float | None = None, widen: int = 1):
         """Motion of ``ref`` into the current frame: ``(Measure, "")``, or
         ``(None, reason)`` (one of :data:`REASONS`).
 
         ``predicted``: the expected motion (prior window around it); else
         ``base`` (the motion to the last measured frame) and the user's
         ranges widened over ``n`` frames, the shift region and the ranges
-        ``widen`` times the full search's. ``perspective``: a vote that cannot
-        vouch for its answer is checked as estimate_motion checks it (coarse to
-        fine, its candidates refitted as homographies); an answer of those
-        checks comes back with :data:`~.state.PERSPECTIVE` appended to its
-        method (``"wide+perspective"``)."""
+        ``widen`` times the full search's."""
         pattern = ref.get_pattern(self.cfg)
         if pattern is None:
             return None, "no_match"
@@ -185,7 +175,7 @@ class Searcher:
         try:
             d = self._run(pattern, gray, feats, sr, ar, region,
                           self.prior_cfg if predicted is not None else self.cfg,
-                          rescue=predicted is None, perspective=perspective)
+                          rescue=predicted is None)
         except SeahoughError:
             d = None
         if d is None or d.score < t.min_score:
@@ -208,7 +198,5 @@ class Searcher:
             if not (x0 - slack <= dx <= x1 + slack and y0 - slack <= dy <= y1 + slack) or \
                     abs(ang) > t.prior_angle + 2.0:
                 return None, "no_match"
-        if d.perspective:     # (answered by the homography checks)
-            method += PERSPECTIVE
         return Measure(shift_origin(m, -ox, -oy), float(d.confidence), float(d.score), ov,
                        ref.index, method, float(d.nfa)), ""

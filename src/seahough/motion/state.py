@@ -14,13 +14,6 @@ from ..errors import SeahoughError
 from ..geometry import compose, invert_matrix, matrix_power, overlap
 
 
-#: Appended to the method of a search answered by the checks of a perspective
-#: change (``"wide+perspective"``): its motion is the similarity that fits a
-#: homography best over the frame, which does not compose with the vote's
-#: against an older keyframe, so the frame becomes the keyframe.
-PERSPECTIVE = "+perspective"
-
-
 @dataclass
 class State:
     """Everything the next frame needs, rebuilt from the rows alone (resume)."""
@@ -78,9 +71,7 @@ def advance(st: State, row: dict, tuning: OdometryTuning) -> None:
     h, w = st.shape
     nxt = compose(st.vel, cum)
     faded = rate < tuning.rekey_match * st.key_rate
-    homography = (row.get("method") or "").endswith(PERSPECTIVE)
-    if (homography or faded
-            or overlap(compose(nxt, invert_matrix(st.key_cum)), w, h) < tuning.rekey_overlap):
+    if faded or overlap(compose(nxt, invert_matrix(st.key_cum)), w, h) < tuning.rekey_overlap:
         st.key, st.key_cum, st.key_rate = i, cum, None
     st.prev, st.prev_cum = i, cum
     st.meas, st.meas_cum = i, cum

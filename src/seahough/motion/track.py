@@ -49,9 +49,7 @@ class OdometryResult:
         displayed, size change),
         ``score, overlap`` (of the measurement), ``ref`` (index of the frame
         it was measured against), ``method`` (``"prior"``, ``"full"``,
-        ``"previous"``, ``"wide"``, with ``"+perspective"`` appended when a
-        search against the previous or the last measured frame was answered
-        as a perspective change: see :func:`run_odometry`'s notes), ``status``
+        ``"previous"``, ``"wide"``: see :func:`run_odometry`'s notes), ``status``
         (``"origin"``, ``"measured"``, ``"assumed"``: a pose carried on from
         the last measured one, see the ``flags``; ``"unreadable"``),
         ``ms``, ``matrix`` and
