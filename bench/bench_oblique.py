@@ -44,7 +44,7 @@ homography checks switched off ("similarity only": as before them; the
 vote's candidates refitted as homographies, motion/perspective.py, and the
 pair measured coarse to fine, motion/pyramid.py).
 
-    python bench/bench_oblique.py --write   # docs/oblique.md (~10 min)
+    python bench/bench_oblique.py --write   # docs/oblique.md (~5 min)
     python bench/bench_oblique.py --quick   # 2 sequences at 640x360 (~15 s)
     python bench/bench_oblique.py --part tune --out oblique_tune.md   # (a page outside docs/)
 """
