@@ -296,6 +296,26 @@ def test_too_many_votes_are_refused_naming_the_counts():
         A.MAX_VOTES = old
 
 
+def test_too_many_point_slices_are_refused():
+    # the vote kernel's tags (slice x pattern point) are exact float32 integers
+    # only up to 2**24: over its limit the search is refused, naming what to lower
+    from seahough.core import accumulator as A
+
+    pf = _pattern()
+    b = make_bins(pf, (0.5, 2.0), (0.0, 360.0), (0.0, 0.0, 68.0, 51.0), Config())
+    seg = _moved(pf, 30.0, 20.0)
+    assert A.MAX_POINT_SLICES == 2 ** 24
+    old, A.MAX_POINT_SLICES = A.MAX_POINT_SLICES, 4 * b.angles.size
+    try:
+        accumulate(pf, seg, b)                        # 4 points: at the limit
+        with pytest.raises(ParameterError, match=rf"^voting 8 pattern points over "
+                           rf"{b.angles.size} rotations is over the limit of .*: lower "
+                           r"Config\.n_pattern_points \(128\) or coarsen Config\.angle_bin"):
+            accumulate(pf, seg, b, either=True)
+    finally:
+        A.MAX_POINT_SLICES = old
+
+
 # ------------------------------------------ nested outlines (a marker board's rings)
 def _nested_squares(sides=(120, 92, 64), size=140):
     """Concentric squares, bright / dark alternately: rings 14 px wide."""

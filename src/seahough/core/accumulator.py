@@ -112,6 +112,10 @@ REFERENCE_AREA = 640.0 * 480.0
 #: slice looks at). 9.8e8 took 10.2 s, 2.3e8 1.5 s (6-12 ns a vote). Default
 #: counts: at most 4.3e7 (256 pattern points, 1200 segments, 139 scales).
 MAX_VOTES = 8e8
+#: The most pattern points x rotation slices: the vote kernel tags each cell
+#: with the last (slice, pattern point) that voted in it, in a float32 beside
+#: the cell's height (exact up to 2**24).
+MAX_POINT_SLICES = 2 ** 24
 
 
 def check_ranges(scale_range, angle_range):
@@ -309,6 +313,11 @@ def _check_votes(n_points: int, n_segments: int, bins: Bins) -> None:
     ns, na = bins.scales.size, bins.angles.size
     votes = float(n_points) * n_segments * (
         (1 if bins.mode == K.MODE_SEGMENTS else ns) + na / N_ANGLE_BINS)
+    if float(n_points) * na > MAX_POINT_SLICES:
+        raise ParameterError(
+            f"voting {n_points} pattern points over {na} rotations is over the limit of "
+            f"{MAX_POINT_SLICES:.3g} (pattern points x rotations): lower Config.n_pattern_points "
+            f"({config.n_pattern_points}) or coarsen {_bin_fields(bins, config, ('angle_bin',))}")
     if votes > MAX_VOTES:
         raise ParameterError(
             f"voting {n_points} pattern points x {n_segments} image segments over {ns} scales "
