@@ -11,6 +11,10 @@ reported separately, "from files").
 
 Times are CPU times of the (single-threaded) process, so that other programs
 on a shared machine do not inflate them; wall-clock times are printed beside.
+The runs use ``workers=1``: with more, the coming frames' features are
+computed ahead in other threads, so a pair's time would leave them out while
+the process's CPU time counts them (from 2026-12-02 to 2026-12-06 this script
+ran with the default, all cores).
 "ms/pair with prior" is the measurement of one frame against its keyframe on
 the fast path (features of the frame, the windowed search and, on the first
 pair after a keyframe change, building the keyframe's pattern); "ms/frame
@@ -72,7 +76,7 @@ odometry._measure_frame = _timed_measure(odometry._measure_frame)
 def _run(frames, tmp):
     _TIMES.clear()
     c, t = time.process_time(), time.perf_counter()
-    res = run_odometry(frames, tmp, progress=False, mosaic=False)
+    res = run_odometry(frames, tmp, progress=False, mosaic=False, workers=1)
     return res, time.process_time() - c, time.perf_counter() - t
 
 
@@ -133,7 +137,7 @@ def main(argv=None):
         # warm-up: Numba compiles (or loads its cache) here, not in the timed runs
         fr, _ = S.sequence(photo, n_frames=4, frame_size=(480, 640), step=24.0, seed=99,
                            source="auto" if photo else "procedural")
-        run_odometry(fr, Path(tmp) / "warm", progress=False, mosaic=False)
+        run_odometry(fr, Path(tmp) / "warm", progress=False, mosaic=False, workers=1)
 
         for path in ("line", "turn", "loop") if not args.quick else ("line",):
             frames, mats = S.sequence(photo, n_frames=n, frame_size=(480, 640), path=path,
