@@ -35,7 +35,8 @@ def _found(monkeypatch, density):
 
 def test_a_96_px_patch_in_a_1280_px_frame_is_found(monkeypatch):
     # 12 of the frame's 1,200 most contrasted edge points fell on such a patch:
-    # found 3 times in 10; with key points for half its own points on its area, 9
+    # found 3 times in 10; with key points for a quarter of its 256 voting points
+    # (half of the 128 it had then) on its area, 9
     assert _found(monkeypatch, D.TEXTURE_DENSITY) >= 8
     assert _found(monkeypatch, 0.0) <= 4
 

@@ -129,6 +129,10 @@ class Config:
         markers, and 10 % faster). None: ``n_keypoints``.
     n_pattern_points : int
         Key points kept on the pattern for voting (the paper: about 100).
+        256: on the coloured markers' tune part (bench_colour.py), searched
+        grey, 128 found 332 of 576, 192 363, 256 364, 384 380; the right
+        pose was more often among the accumulator's peaks. Voting costs
+        in proportion to it.
     n_verify_points : int
         Pattern edge points used to score and refine a candidate pose.
     min_pattern_size : float
@@ -239,7 +243,7 @@ class Config:
     target_size: int = 320
     n_keypoints: int = 1200
     n_keypoints_2d: int | None = 800
-    n_pattern_points: int = 128
+    n_pattern_points: int = 256
     n_verify_points: int = 400
     min_pattern_size: float = 24.0
     min_gradient: float = 48.0

@@ -187,7 +187,9 @@ _OFF = (("board", "orange", "oceanic", 1.0, 2, "aqualoc_amphorae_wreck/frame_012
 
 def test_a_pose_a_few_pixels_off_is_moved_onto_the_marker(monkeypatch):
     """The local vote over shifts (and a ring's scale) brings these back;
-    without it none is found (within 3 px, 5 % in scale, 3 degrees)."""
+    without it none is found (within 3 px, 5 % in scale, 3 degrees). With
+    128 voting points, as when these cases were collected: with the 256 of
+    2026-12-06, 3 of the 5 are found without it too."""
     from seahough._data import shared_data_dir
     base = shared_data_dir()
     if base is None:
@@ -196,7 +198,8 @@ def test_a_pose_a_few_pixels_off_is_moved_onto_the_marker(monkeypatch):
     def found(marker, paint, water, dist, seed, photo):
         img, mask = sim.marker(marker, 120, colour=sim.PAINTS[paint])
         det = seahough.Detector(seahough.Pattern.from_image(img, mask=mask, polarity="either"),
-                                (0.5, 2.0), config=seahough.Config(colour=True))
+                                (0.5, 2.0),
+                                config=seahough.Config(colour=True, n_pattern_points=128))
         scene, _, t = sim.colour_marker_scene(marker, (480, 640), paint=paint, water=water,
                                               distance=dist, seed=seed, size=120,
                                               source=base / "sequences" / photo)

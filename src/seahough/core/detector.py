@@ -32,8 +32,11 @@ __all__ = ["Detector", "SearchResult", "SEARCH_NOTES", "Detection", "confidence"
            "FLAG_PARTIAL"]
 
 #: A texture pattern small in a large image: the key points taken put this
-#: many times its own points on its area (``Detector._n_keypoints``) ...
-TEXTURE_DENSITY = 0.5
+#: many times its own voting points on its area (``Detector._n_keypoints``)
+#: ... (0.5 of 128 voting points until ``Config.n_pattern_points`` became
+#: 256: 0.25 of them takes as many key points as before, so that the voting
+#: cost, pattern points x key points, doubles rather than quadruples)
+TEXTURE_DENSITY = 0.25
 #: ... up to this many (the voting cost grows with them), when the default
 #: count would put fewer than MIN_ON_PATTERN key points on its area. (More key
 #: points everywhere made the simulated fragments, 120-200 px patches in
