@@ -149,7 +149,7 @@ def dead_reckoning(frames, truth) -> dict:
     similarity of the true motion, as a share of the diagonal, with its NFA."""
     with tempfile.TemporaryDirectory() as tmp:
         t = time.process_time()
-        rows = seahough.run_odometry(frames, tmp, mosaic=False, progress=False).rows
+        rows = seahough.run_odometry(frames, tmp, mosaic=False, progress=False, workers=1).rows
         ms = 1000 * (time.process_time() - t) / len(frames)
     shape = frames[0].shape[:2]
     steps = []

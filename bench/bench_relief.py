@@ -109,7 +109,7 @@ def dead_reckoning(photo: str, part: str, seed: int) -> dict:
     shape = frames[0].shape[:2]
     with tempfile.TemporaryDirectory() as tmp:
         t = time.process_time()
-        rows = seahough.run_odometry(frames, tmp, mosaic=False, progress=False).rows
+        rows = seahough.run_odometry(frames, tmp, mosaic=False, progress=False, workers=1).rows
         ms = 1000 * (time.process_time() - t) / len(frames)
     errs = []
     for a, b in zip(rows, rows[1:]):

@@ -1179,8 +1179,8 @@ def findings(results) -> str:
                         "refined to tell the true peak from its runner-up, then a "
                         "full-resolution refinement). ")
             txt += ("In a dead-reckoning run (run_odometry) the previous frame's features are "
-                    "reused and the last motion narrows the search: about 5 ms a pair on these "
-                    "frames (docs/odometry.md).")
+                    "reused and the last motion narrows the search: see docs/odometry.md for "
+                    "the time a pair on the prior takes on these frames.")
         out.append(txt)
     return "\n".join(out)
 

@@ -296,6 +296,23 @@ def test_too_many_votes_are_refused_naming_the_counts():
         A.MAX_VOTES = old
 
 
+@pytest.mark.parametrize("voting", ["oriented", "points", "segments"])
+def test_a_pattern_point_counts_once_per_cell(voting):
+    # every image segment given three times: each pair votes three times into
+    # the same cells, and a cell still counts each pattern point once (its
+    # height, the share of the pattern's weight, never passes 1); the pattern
+    # itself is found whole
+    pf = _pattern()
+    cfg = Config(voting=voting)
+    b = make_bins(pf, (0.8, 1.25), (0.0, 360.0), (0.0, 0.0, 68.0, 51.0), cfg)
+    seg = _moved(pf, 30.0, 20.0)
+    once = accumulate(pf, seg, b)
+    thrice = accumulate(pf, seg.take(np.arange(3 * len(seg)) % len(seg)), b)
+    assert np.array_equal(once.best_val, thrice.best_val)
+    assert once.best_val.max() == pytest.approx(1.0, abs=1e-5)
+    assert np.array_equal(once.scale_angle, thrice.scale_angle)
+
+
 def test_too_many_point_slices_are_refused():
     # the vote kernel's tags (slice x pattern point) are exact float32 integers
     # only up to 2**24: over its limit the search is refused, naming what to lower
@@ -414,12 +431,16 @@ def test_a_marker_board_is_not_taken_one_ring_off(monkeypatch):
     old_bin = float(np.clip(0.17 * pat.features(0.5, cfg).radius, 2.0, 6.0))
     now = Detector(pat, (0.5, 2.0), config=cfg)
     before = Detector(pat, (0.5, 2.0), config=cfg.replace(translation_bin=old_bin))
-    found = {"now": 0, "before": 0}
+    default = Detector(pat, (0.5, 2.0), config=Config(colour=True))
+    found = {"now": 0, "before": 0, "256": 0}
     for seed in (13, 19, 20, 28):
         scene, _, truth = S.colour_marker_scene("board", (480, 640), paint="orange",
                                                 grey_match=seed % 2 == 1, water="moderate",
                                                 distance=2.0, seed=seed, size=120,
                                                 source="procedural")
-        for name, det in (("now", now), ("before", before)):
+        for name, det in (("now", now), ("before", before), ("256", default)):
             found[name] += at_truth(det.detect(scene), truth)
     assert found["now"] >= 3 and found["before"] < found["now"], found
+    # at the default 256 voting points the half-ring bins find 3 of the 4 (and
+    # the old bins 4: the finer bins no longer show their gain on these scenes)
+    assert found["256"] >= 3, found

@@ -13,6 +13,7 @@ import math
 import numpy as np
 import pytest
 
+from seahough.config import Config
 from seahough.core.pattern import Pattern
 from seahough.errors import ParameterError, PatternError
 
@@ -88,8 +89,10 @@ def test_rectangle_features_lie_on_its_border_with_their_gradients():
     p = Pattern.rectangle(60, 40)
     f = p.features(1.0)
     # voting points: Config.n_pattern_points (256) at most; this rectangle has
-    # fewer edge points (about 2 (61 + 41) = 198), so all are kept
+    # fewer edge points (198), so all are kept; a larger one is held to the count
     assert len(f.x) == len(f.vx) == 198
+    big = Pattern.rectangle(120, 80).features(1.0)
+    assert len(big.x) == Config().n_pattern_points == 256 < len(big.vx)
     # scoring points: one a border pixel (about 2 (61 + 41) of them), fewer
     # than Config.n_verify_points, so all are kept
     assert 180 < len(f.vx) < 400
@@ -115,7 +118,7 @@ def _side_counts(x, y, half_w, half_h):
             int((y < 1 - half_h).sum()), int((y > half_h - 1).sum())]
 
 
-@pytest.mark.xfail(strict=True, reason="pattern._spread: when the pattern has fewer than about "
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason="pattern._spread: when the pattern has fewer than about "
                    "twice as many edge points as it keeps, no spacing over 1 px leaves enough, and "
                    "the greedy pass (strongest first, stopping at the count) keeps the strongest: "
                    "the fainter bottom side of Pattern.rectangle(120, 80) gets none of its 256 "

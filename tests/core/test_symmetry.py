@@ -195,11 +195,11 @@ def test_a_pose_a_few_pixels_off_is_moved_onto_the_marker(monkeypatch):
     if base is None:
         pytest.skip("real data (../shared/data) is not present beside this checkout")
 
-    def found(marker, paint, water, dist, seed, photo):
+    def found(marker, paint, water, dist, seed, photo, points=128):
         img, mask = sim.marker(marker, 120, colour=sim.PAINTS[paint])
         det = seahough.Detector(seahough.Pattern.from_image(img, mask=mask, polarity="either"),
                                 (0.5, 2.0),
-                                config=seahough.Config(colour=True, n_pattern_points=128))
+                                config=seahough.Config(colour=True, n_pattern_points=points))
         scene, _, t = sim.colour_marker_scene(marker, (480, 640), paint=paint, water=water,
                                               distance=dist, seed=seed, size=120,
                                               source=base / "sequences" / photo)
@@ -209,5 +209,9 @@ def test_a_pose_a_few_pixels_off_is_moved_onto_the_marker(monkeypatch):
             and abs(d[0].scale / t.scale - 1) <= 0.05 \
             and abs((d[0].angle - t.angle + period / 2) % period - period / 2) <= 3.0
     assert sum(found(*case) for case in _OFF) >= 4
+    with_vote_256 = sum(found(*case, points=256) for case in _OFF)
     monkeypatch.setattr(ranking, "_shifted", lambda ctx, pose, radius, points: pose)
     assert sum(found(*case) for case in _OFF) == 0
+    # the default's 256 voting points: found with the vote, and 3 without it
+    assert with_vote_256 >= 4
+    assert sum(found(*case, points=256) for case in _OFF) == 3

@@ -294,7 +294,9 @@ def _check_size(bins: Bins, area: float, config: Config) -> None:
 
 
 def _check_votes(n_points: int, n_segments: int, bins: Bins) -> None:
-    """Refuse a vote that would take too long.
+    """Refuse a vote that would take too long (over :data:`MAX_VOTES`), or
+    whose (rotation slice, pattern point) tags the kernel could not tell
+    apart (over :data:`MAX_POINT_SLICES`).
 
     Parameters
     ----------
@@ -307,7 +309,8 @@ def _check_votes(n_points: int, n_segments: int, bins: Bins) -> None:
     Raises
     ------
     ParameterError
-        Over :data:`MAX_VOTES`; the message names the counts to lower.
+        Over :data:`MAX_VOTES` or :data:`MAX_POINT_SLICES`; the message names
+        the counts to lower.
     """
     config = bins.config or Config()
     ns, na = bins.scales.size, bins.angles.size

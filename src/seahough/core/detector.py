@@ -35,7 +35,9 @@ __all__ = ["Detector", "SearchResult", "SEARCH_NOTES", "Detection", "confidence"
 #: many times its own voting points on its area (``Detector._n_keypoints``)
 #: ... (0.5 of 128 voting points until ``Config.n_pattern_points`` became
 #: 256: 0.25 of them takes as many key points as before, so that the voting
-#: cost, pattern points x key points, doubles rather than quadruples)
+#: cost, pattern points x key points, doubles rather than quadruples). The
+#: count follows ``Config.n_pattern_points``: a Config with 128 of them now
+#: takes half the key points it took with 128 before.
 TEXTURE_DENSITY = 0.25
 #: ... up to this many (the voting cost grows with them), when the default
 #: count would put fewer than MIN_ON_PATTERN key points on its area. (More key
