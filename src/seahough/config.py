@@ -333,8 +333,9 @@ MOTION_CONFIG = Config(n_pattern_points=256, n_verify_points=600, target_size=32
 #: The configuration :func:`~seahough.run_odometry` uses unless given one: the
 #: motion configuration with 128 voting and 400 scoring pattern points (fewer
 #: than estimate_motion's: a keyframe is searched many times, from a
-#: prediction; the default Config's until it took 256 voting points), and its seven accumulator peaks per full search (two in the
-#: small prior window, :attr:`OdometryTuning.prior_candidates`). Three peaks
+#: prediction; the default Config's until it took 256 voting points), and
+#: its seven accumulator peaks per full search (two in the small prior
+#: window, :attr:`OdometryTuning.prior_candidates`). Three peaks
 #: per full search accepted tile-shifted look-alikes on the tiled pool
 #: sequence (40 px jumps at confidence 0.28-0.32) that seven flag as low
 #: confidence.
