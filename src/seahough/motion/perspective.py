@@ -51,7 +51,7 @@ import numpy as np
 
 from ..core import kernels as K
 from ..core.keypoints import find_edge_points
-from ..core.nfa import MIN_LOG10_NFA, background, evidence, log10_tests
+from ..core.nfa import BORDER, MIN_LOG10_NFA, Evidence, background, evidence, log10_tests
 from ..core.preprocess import compute_gradients
 from ..core.refine import Pose
 from ..geometry import fit_similarity
@@ -59,7 +59,7 @@ from .parallax import (SAME, LocalCheck, _candidate_matrix, frame_points, full_m
                        work_matrix)
 
 __all__ = ["CANDIDATES", "RADII", "homography_icp", "similarity_of", "check_perspective",
-           "judge_homography"]
+           "homography_evidence", "judge_homography", "shared_agreement"]
 
 #: Candidate poses of the search refined as homographies (the best by score).
 CANDIDATES = 5
@@ -82,6 +82,9 @@ FINISH_MOVE = 2.0
 #: A candidate is ranked when its homography keeps at least this share of the
 #: previous frame's points in view.
 MIN_IN_VIEW = 0.25
+#: Fewer points than this in view for every answer compared
+#: (:func:`shared_agreement`): too few to tell them apart.
+MIN_SHARED = 50
 #: Parameters a homography has beyond a similarity (shear, aspect, perspective).
 EXTRA_DOF = 4
 
@@ -269,6 +272,71 @@ def check_perspective(pattern, result, detection, region, scale_range, angle_ran
                             config, points, gray)
 
 
+def shared_agreement(homographies, points, edges, index, radius: float, tol: float,
+                     min_points: int = MIN_SHARED) -> list | None:
+    """For each of several working-scale ``homographies`` (3x3) of the same
+    frame pair, the share of the previous frame's ``points`` (x, y, gradient
+    angle) that find a compatible edge among ``edges`` within ``radius``,
+    counted over the points that every one of them keeps in view (3 px from
+    the border, and in front of the camera): like with like, where a point
+    one answer maps out of view neither counts for it nor against the other. None when fewer than
+    ``min_points`` are in view for all.
+
+    >>> from seahough.core.keypoints import find_edge_points
+    >>> from seahough.core.preprocess import compute_gradients
+    >>> img = np.zeros((120, 160), np.float32)
+    >>> img[30:90, 40:120] = 200
+    >>> e = find_edge_points(compute_gradients(img), 20)
+    >>> pts = e.x.astype(float), e.y.astype(float), e.angle.astype(float)
+    >>> off = np.array([[1.0, 0, 6], [0, 1, 0], [0, 0, 1]])   # 6 px right: only the top and bottom
+    >>> right, wrong = shared_agreement([np.eye(3), off], pts, e, e.index_map(), 1.5, 0.35)
+    >>> right, round(wrong, 2)
+    (1.0, 0.53)
+    """
+    px, py, pa = (np.asarray(v, np.float64) for v in points)
+    h, w = index.shape
+    Hs = [np.asarray(H, np.float64) for H in homographies]
+    mapped = [map_points(H, px, py, pa) for H in Hs]
+    common = np.ones(px.size, bool)
+    for H, (u, v, _) in zip(Hs, mapped):
+        common &= (u >= BORDER) & (u <= w - 1 - BORDER) & (v >= BORDER) & (v <= h - 1 - BORDER)
+        common &= H[2, 0] * px + H[2, 1] * py + H[2, 2] > 0   # (in front of the camera)
+    if int(common.sum()) < min_points:
+        return None
+    out = []
+    for u, v, a in mapped:
+        ids, _ = K.match_points(*(np.ascontiguousarray(t[common]) for t in (u, v, a)), 1.0, 0.0,
+                                0.0, 0.0, edges.x, edges.y, edges.angle, index, float(radius),
+                                float(tol), False)
+        out.append(float((ids >= 0).mean()))
+    return out
+
+
+def homography_evidence(H, pattern, result, region, scale_range, angle_range, config,
+                        points) -> Evidence:
+    """The :class:`~seahough.core.nfa.Evidence` of a working-scale homography
+    ``H`` (3x3) of a frame pair searched as ``result``: the agreement of the
+    previous frame's ``points`` (at the working scale) mapped by it with the
+    current frame's edges, against chance, over the search's poses times
+    the freedom the homography adds (:data:`EXTRA_DOF`). Points it maps out
+    of view are not counted (they can neither agree nor disagree)."""
+    feats, factor = result.features, result.factor
+    fx, fy = feats.gradients.fx, feats.gradients.fy
+    tol = math.radians(config.angle_tolerance)
+    radius = max(1.25, config.match_radius * factor)
+    # the points mapped by the homography, at the identity pose
+    px, py, pa = points
+    u, v, a = map_points(H, px, py, pa)
+    bg = background(feats.edges, radius, tol, None, feats.index)
+    x0, y0, x1, y1 = region
+    fh, fw = feats.gradients.full_shape[:2]
+    area = max(min(x1, fw) - max(x0, 0), 1.0) * max(min(y1, fh) - max(y0, 0), 1.0) * fx * fy
+    tests = (log10_tests(area, pattern.features(factor, config).radius, scale_range,
+                         angle_range) + EXTRA_DOF * math.log10(2 * RADII[0] + 1))
+    return evidence(Pose(1.0, 0.0, 0.0, 0.0), u, v, a, feats.edges, feats.index, bg, tests,
+                    tol=tol, either=False)
+
+
 def judge_homography(H, confidence, score, pattern, result, region, scale_range, angle_range,
                      config, points, gray=None) -> LocalCheck | None:
     """A working-scale homography ``H`` (3x3) of a frame pair searched as
@@ -283,18 +351,8 @@ def judge_homography(H, confidence, score, pattern, result, region, scale_range,
     feats, factor = result.features, result.factor
     fx, fy = feats.gradients.fx, feats.gradients.fy
     tol = math.radians(config.angle_tolerance)
-    radius = max(1.25, config.match_radius * factor)
-    # the evidence: the points mapped by the homography, at the identity pose
-    px, py, pa = points
-    u, v, a = map_points(H, px, py, pa)
-    bg = background(feats.edges, radius, tol, None, feats.index)
-    x0, y0, x1, y1 = region
-    fh, fw = feats.gradients.full_shape[:2]
-    area = max(min(x1, fw) - max(x0, 0), 1.0) * max(min(y1, fh) - max(y0, 0), 1.0) * fx * fy
-    tests = (log10_tests(area, pattern.features(factor, config).radius, scale_range,
-                         angle_range) + EXTRA_DOF * math.log10(2 * RADII[0] + 1))
-    ev = evidence(Pose(1.0, 0.0, 0.0, 0.0), u, v, a, feats.edges, feats.index, bg, tests, tol=tol,
-                  either=False)
+    ev = homography_evidence(H, pattern, result, region, scale_range, angle_range, config,
+                             points)
     Hf = full_matrix(H, fx, fy)
     Hf = Hf / Hf[2, 2]
     if gray is not None and FINE > 1 and factor < 1:
