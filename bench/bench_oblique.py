@@ -38,7 +38,11 @@ frames back, their checks and look-alikes a tile on meet.
 Split: tune part = the tiled floors of seeds 0-5 and dtu_seabed_pair/scene1.png
 (seeds 0-1); test part = the tiled floors of seeds 100-105,
 aqualoc_amphorae_wreck/frame_040.png and dtu_seabed_pair/scene2.png (seeds
-0-1). Methods and timing as bench_real_pairs.py (CPU time, single thread;
+0-1). A dev part (``--part dev``: the tiled floors of seeds 200-239, never
+in a page of docs/) is for developing the motion search on repeated
+textures without looking at the test part: the comparison of answers over
+the points both keep in view, and ``MARGINAL`` 0.4, were chosen on it
+(docs/method.md). Methods and timing as bench_real_pairs.py (CPU time, single thread;
 seahough ``estimate_motion`` at its defaults), and seahough with its
 homography checks switched off ("similarity only": as before them; the
 vote's candidates refitted as homographies, motion/perspective.py, and the
@@ -47,6 +51,7 @@ pair measured coarse to fine, motion/pyramid.py).
     python bench/bench_oblique.py --write   # docs/oblique.md (~5 min)
     python bench/bench_oblique.py --quick   # 2 sequences at 640x360 (~15 s)
     python bench/bench_oblique.py --part tune --out oblique_tune.md   # (a page outside docs/)
+    python bench/bench_oblique.py --part dev --out oblique_dev.md     # 40 floors (~10 min)
 """
 
 from __future__ import annotations
@@ -73,6 +78,7 @@ ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "oblique.md"
 SCENE1 = "sequences/dtu_seabed_pair/scene1.png"
 TUNE = [("tiles", s) for s in range(6)] + [(SCENE1, s) for s in range(2)]
+DEV = [("tiles", s) for s in range(200, 240)]
 TEST = ([("tiles", s) for s in range(100, 106)]
         + [(p, s) for p in ("sequences/aqualoc_amphorae_wreck/frame_040.png",
                             "sequences/dtu_seabed_pair/scene2.png") for s in range(2)])
@@ -83,6 +89,7 @@ RIGHT = 0.02       # an answer within this share of the diagonal of the best sim
 WRONG = 0.05       # ... and wrong beyond this
 CONSISTENT = 0.02  # a loop's inconsistency within this share of the diagonal
 TARGET_LOOPS = 0.9 # issue 13: the tiled pool closes at least 9 loops in 10
+PARTS = ("test", "tune", "dev")   # (in a page's order)
 LONG = 10          # frames of the longer dead-reckoning runs over the tiled floors
 
 
@@ -177,7 +184,7 @@ def odometry_rows(recs) -> list:
     """Per part and floor: pairs measured, the steps' median error, within
     RIGHT, off by more than WRONG (and of those, at NFA <= 1), CPU ms a frame."""
     rows = []
-    for part in ("test", "tune"):
+    for part in PARTS:
         for kind in sorted({r["kind"] for r in recs if r["part"] == part}):
             sub = [r["odometry"] for r in recs if r["part"] == part and r["kind"] == kind]
             errs = [e for o in sub for e, _ in o["steps"]]
@@ -252,7 +259,7 @@ def page(recs, seconds: float, quick: bool, long_recs=()) -> str:
                   f"Loops closed and consistent by seahough: {consistent}/{n} "
                   f"(target at least {100 * TARGET_LOOPS:.0f} %, as issue 13 asks of the real "
                   f"tiled pool): **{'met' if ok else 'missed'}**.", ""]
-    for part in ("test", "tune"):
+    for part in PARTS:
         sub = [r for r in recs if r["part"] == part]
         if not sub:
             continue
@@ -301,15 +308,23 @@ def page(recs, seconds: float, quick: bool, long_recs=()) -> str:
 
 def main(argv=None) -> int:
     ap = page_parser(__doc__, "oblique.md", "a smoke run: 2 sequences at 640x360")
-    ap.add_argument("--part", choices=("tune", "test", "both"), default="both",
-                    help="render and measure only this part (tuning: --part tune)")
+    ap.add_argument("--part", choices=("tune", "test", "both", "dev"), default="both",
+                    help="render and measure only this part (tuning: --part tune; dev: the "
+                         "development floors, seeds 200-239, alone)")
     args = ap.parse_args(argv)
     if shared_data_dir() is None:
         print("bench_oblique: ../shared/data not found", file=sys.stderr)
         return 2
     t0 = time.time()
-    jobs = ([(s, "tune") for s in TUNE] if args.part != "test" else []) + \
-           ([(s, "test") for s in TEST] if args.part != "tune" else [])
+    if args.part == "dev":
+        if args.write:
+            print("bench_oblique: the dev part is not a page of docs/ (use --out)",
+                  file=sys.stderr)
+            return 2
+        jobs = [(s, "dev") for s in DEV]
+    else:
+        jobs = ([(s, "tune") for s in TUNE] if args.part != "test" else []) + \
+               ([(s, "test") for s in TEST] if args.part != "tune" else [])
     if args.quick:   # the first sequence of each part
         jobs = [j for k, j in enumerate(jobs) if k == 0 or jobs[k - 1][1] != j[1]]
     recs, long_recs = [], []

@@ -28,13 +28,13 @@ SECTIONS = {
 }
 
 
-def _quick_page(script: Path, out: Path) -> str:
-    """Run ``script --quick --out out`` with this checkout's package; the page
-    it wrote, checked to be what it printed."""
+def _quick_page(script: Path, out: Path, *extra: str) -> str:
+    """Run ``script --quick --out out`` (and ``extra`` arguments) with this
+    checkout's package; the page it wrote, checked to be what it printed."""
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), env.get("PYTHONPATH", "")])
-    proc = subprocess.run([sys.executable, str(script), "--quick", "--out", str(out)], cwd=ROOT,
-                          env=env, capture_output=True, text=True, timeout=240)
+    proc = subprocess.run([sys.executable, str(script), "--quick", "--out", str(out), *extra],
+                          cwd=ROOT, env=env, capture_output=True, text=True, timeout=240)
     assert proc.returncode == 0, proc.stderr[-3000:]
     text = out.read_text()
     assert text.strip() == proc.stdout.strip()
@@ -176,6 +176,21 @@ def test_relief_benchmark_quick(tmp_path):
     odo = _rows(_section(text, "## Dead reckoning"))[1:]
     assert [r[0] for r in odo] == ["test", "tune"]
     assert all(re.match(r"\d+/3 ", r[2]) for r in odo), odo
+
+
+def test_oblique_benchmark_dev_part_quick(tmp_path):
+    """bench/bench_oblique.py --part dev: the development floors alone, never
+    written over docs/oblique.md."""
+    if shared_data_dir() is None:
+        pytest.skip("real data (../shared/data) is not present beside this checkout")
+    text = _quick_page(ROOT / "bench" / "bench_oblique.py", tmp_path / "dev.md", "--part", "dev")
+    assert "## Dev part" in text and "## Test part" not in text and "## Tune part" not in text
+    rows = _rows(_section(text, "## Dev part"))
+    assert any(r[1] == "seahough" and r[2] == "5" for r in rows[1:]), rows
+    proc = subprocess.run([sys.executable, str(ROOT / "bench" / "bench_oblique.py"), "--part",
+                           "dev", "--write"], cwd=ROOT, capture_output=True, text=True,
+                          timeout=60)
+    assert proc.returncode == 2 and "not a page of docs/" in proc.stderr
 
 
 def test_oblique_benchmark_quick(tmp_path):
