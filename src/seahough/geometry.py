@@ -257,6 +257,24 @@ def overlap(matrix, width: int, height: int, n: int = 24) -> float:
                          & (p[:, 1] <= height - 1)))
 
 
+def corner_gap(a, b, shape) -> float:
+    """The largest distance between where two matrices (2x3 affine or 3x3
+    homographies) put the corners of a frame of ``shape`` (height, width).
+
+    >>> corner_gap([[1, 0, 0], [0, 1, 0]], [[1, 0, 3], [0, 1, 4]], (48, 64))
+    5.0
+    """
+    h, w = shape[:2]
+    c = np.array([[0, 0, 1], [w - 1, 0, 1], [w - 1, h - 1, 1], [0, h - 1, 1]], float)
+
+    def at(m):
+        m = np.asarray(m, float)
+        q = c @ (m if m.shape == (3, 3) else np.vstack([m[:2], [0.0, 0.0, 1.0]])).T
+        return q[:, :2] / q[:, 2:]
+
+    return float(np.hypot(*(at(a) - at(b)).T).max())
+
+
 @dataclass(frozen=True)
 class Similarity:
     """A similarity transform: equation 1 of the paper, as a value.

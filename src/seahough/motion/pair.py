@@ -13,7 +13,8 @@ from ..core.features import Features, extract_features
 from ..core.pattern import Pattern
 from ..core.preprocess import choose_factor
 from ..errors import ImageSizeError, ParameterError, PatternError
-from ..geometry import frame_centre, matrix_to_pose, overlap, shift_origin, wrap_angle
+from ..geometry import (corner_gap, frame_centre, matrix_to_pose, overlap, shift_origin,
+                        wrap_angle)
 from .parallax import check_locally, frame_points, work_matrix
 from .perspective import check_perspective, judge_homography, shared_agreement
 from .pyramid import CoarseVote, coarse_to_fine, coarse_vote, ladder
@@ -419,18 +420,20 @@ def _sees_better(a, b, res, config, frame, shape) -> bool:
     homographies at the working scale)."""
     if a.homography is None or b.homography is None:
         return False
-    h, w = shape[:2]
-    corners = np.array([[0.0, 0.0], [w - 1.0, 0.0], [w - 1.0, h - 1.0], [0.0, h - 1.0]])
-    apart = np.hypot(*(corners @ (a.matrix[:, :2] - b.matrix[:, :2]).T
-                       + (a.matrix[:, 2] - b.matrix[:, 2])).T).max()
-    if apart <= SAME_ANSWER * math.hypot(w, h):
+    if corner_gap(a.matrix, b.matrix, shape) <= SAME_ANSWER * math.hypot(*shape[:2]):
         return False
     g = res.features.gradients
-    shares = shared_agreement([work_matrix(m.homography, g.fx, g.fy) for m in (a, b)], frame[1],
-                              res.features.edges, res.features.index,
-                              max(1.25, config.match_radius * res.factor),
-                              math.radians(config.angle_tolerance))
+    shares = _shares([work_matrix(m.homography, g.fx, g.fy) for m in (a, b)], frame[1], res,
+                     config)
     return shares is not None and shares[0] > shares[1]
+
+
+def _shares(homographies, points, res, config) -> list | None:
+    """:func:`~.perspective.shared_agreement` of working-scale homographies
+    against the edges of the search ``res``, at its match radius."""
+    return shared_agreement(homographies, points, res.features.edges, res.features.index,
+                            max(1.25, config.match_radius * res.factor),
+                            math.radians(config.angle_tolerance))
 
 
 def _explains_more(vote, own, d, pattern, gray, scale_range, angle_range, region, config,
@@ -457,10 +460,7 @@ def _explains_more(vote, own, d, pattern, gray, scale_range, angle_range, region
             if (f := ladder(v, pattern, gray, config, res, frame)) is not None]
     if not fits:
         return None
-    feats = res.features
-    shares = shared_agreement([f[0][0] for f in fits], fits[0][0][2], feats.edges, feats.index,
-                              max(1.25, config.match_radius * res.factor),
-                              math.radians(config.angle_tolerance))
+    shares = _shares([f[0][0] for f in fits], fits[0][0][2], res, config)
     if shares is None:
         shares = [f[0][1] for f in fits]
     (H, score, points), conf = fits[int(np.argmax(shares))]   # (the first on a tie)

@@ -40,6 +40,7 @@ from ..core.keypoints import find_edge_points
 from ..core.pattern import Pattern
 from ..core.preprocess import compute_gradients, scale_image
 from ..errors import ImageSizeError, PatternError
+from ..geometry import corner_gap
 from .parallax import LocalCheck, frame_points, full_matrix, work_matrix
 from .perspective import FINE_POINTS, MIN_IN_VIEW, homography_icp, judge_homography
 
@@ -127,12 +128,7 @@ class CoarseVote:
     def agrees(self, matrix, shape) -> bool:
         """Whether a 2x3 similarity puts the frame's corners within
         :data:`AGREE` coarse pixels of this answer."""
-        h, w = shape[:2]
-        c = np.array([[0, 0, 1], [w - 1, 0, 1], [w - 1, h - 1, 1], [0, h - 1, 1]], float)
-        a = c @ self.matrix.T
-        b = c @ np.vstack([np.asarray(matrix, float)[:2], [0.0, 0.0, 1.0]]).T
-        gap = np.hypot(*(a[:, :2] / a[:, 2:] - b[:, :2] / b[:, 2:]).T).max()
-        return bool(gap * self.factor <= AGREE)
+        return bool(corner_gap(self.matrix, matrix, shape) * self.factor <= AGREE)
 
 
 def coarse_vote(pattern, gray, scale_range, angle_range, region, config, result
