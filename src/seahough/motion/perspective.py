@@ -51,7 +51,7 @@ import numpy as np
 
 from ..core import kernels as K
 from ..core.keypoints import find_edge_points
-from ..core.nfa import BORDER, MIN_LOG10_NFA, Evidence, background, evidence, log10_tests
+from ..core.nfa import BORDER, MIN_LOG10_NFA, background, evidence, log10_tests
 from ..core.preprocess import compute_gradients
 from ..core.refine import Pose
 from ..geometry import fit_similarity
@@ -59,7 +59,7 @@ from .parallax import (SAME, LocalCheck, _candidate_matrix, frame_points, full_m
                        work_matrix)
 
 __all__ = ["CANDIDATES", "RADII", "homography_icp", "similarity_of", "check_perspective",
-           "homography_evidence", "judge_homography", "shared_agreement"]
+           "judge_homography", "shared_agreement"]
 
 #: Candidate poses of the search refined as homographies (the best by score).
 CANDIDATES = 5
@@ -279,8 +279,8 @@ def shared_agreement(homographies, points, edges, index, radius: float, tol: flo
     angle) that find a compatible edge among ``edges`` within ``radius``,
     counted over the points that every one of them keeps in view (3 px from
     the border, and in front of the camera): like with like, where a point
-    one answer maps out of view neither counts for it nor against the other. None when fewer than
-    ``min_points`` are in view for all.
+    one answer maps out of view neither counts for it nor against the other.
+    None when fewer than ``min_points`` are in view for all.
 
     >>> from seahough.core.keypoints import find_edge_points
     >>> from seahough.core.preprocess import compute_gradients
@@ -312,31 +312,6 @@ def shared_agreement(homographies, points, edges, index, radius: float, tol: flo
     return out
 
 
-def homography_evidence(H, pattern, result, region, scale_range, angle_range, config,
-                        points) -> Evidence:
-    """The :class:`~seahough.core.nfa.Evidence` of a working-scale homography
-    ``H`` (3x3) of a frame pair searched as ``result``: the agreement of the
-    previous frame's ``points`` (at the working scale) mapped by it with the
-    current frame's edges, against chance, over the search's poses times
-    the freedom the homography adds (:data:`EXTRA_DOF`). Points it maps out
-    of view are not counted (they can neither agree nor disagree)."""
-    feats, factor = result.features, result.factor
-    fx, fy = feats.gradients.fx, feats.gradients.fy
-    tol = math.radians(config.angle_tolerance)
-    radius = max(1.25, config.match_radius * factor)
-    # the points mapped by the homography, at the identity pose
-    px, py, pa = points
-    u, v, a = map_points(H, px, py, pa)
-    bg = background(feats.edges, radius, tol, None, feats.index)
-    x0, y0, x1, y1 = region
-    fh, fw = feats.gradients.full_shape[:2]
-    area = max(min(x1, fw) - max(x0, 0), 1.0) * max(min(y1, fh) - max(y0, 0), 1.0) * fx * fy
-    tests = (log10_tests(area, pattern.features(factor, config).radius, scale_range,
-                         angle_range) + EXTRA_DOF * math.log10(2 * RADII[0] + 1))
-    return evidence(Pose(1.0, 0.0, 0.0, 0.0), u, v, a, feats.edges, feats.index, bg, tests,
-                    tol=tol, either=False)
-
-
 def judge_homography(H, confidence, score, pattern, result, region, scale_range, angle_range,
                      config, points, gray=None) -> LocalCheck | None:
     """A working-scale homography ``H`` (3x3) of a frame pair searched as
@@ -351,8 +326,18 @@ def judge_homography(H, confidence, score, pattern, result, region, scale_range,
     feats, factor = result.features, result.factor
     fx, fy = feats.gradients.fx, feats.gradients.fy
     tol = math.radians(config.angle_tolerance)
-    ev = homography_evidence(H, pattern, result, region, scale_range, angle_range, config,
-                             points)
+    radius = max(1.25, config.match_radius * factor)
+    # the evidence: the points mapped by the homography, at the identity pose
+    px, py, pa = points
+    u, v, a = map_points(H, px, py, pa)
+    bg = background(feats.edges, radius, tol, None, feats.index)
+    x0, y0, x1, y1 = region
+    fh, fw = feats.gradients.full_shape[:2]
+    area = max(min(x1, fw) - max(x0, 0), 1.0) * max(min(y1, fh) - max(y0, 0), 1.0) * fx * fy
+    tests = (log10_tests(area, pattern.features(factor, config).radius, scale_range,
+                         angle_range) + EXTRA_DOF * math.log10(2 * RADII[0] + 1))
+    ev = evidence(Pose(1.0, 0.0, 0.0, 0.0), u, v, a, feats.edges, feats.index, bg, tests, tol=tol,
+                  either=False)
     Hf = full_matrix(H, fx, fy)
     Hf = Hf / Hf[2, 2]
     if gray is not None and FINE > 1 and factor < 1:
