@@ -134,7 +134,10 @@ def test_real_pairs_benchmark_quick(tmp_path):
     assert "Machine:" in text and "Command:" in text and "Date:" in text
     assert "Split: tune part = sparus_auv_seabed, skerki_mud_pair" in text
     targets = _rows(_section(text, "## Targets"))[1:]
-    assert len(targets) == 6 and all(r[-1] in ("met", "**missed**") for r in targets)
+    assert len(targets) == 7 and all(r[-1] in ("met", "**missed**") for r in targets)
+    # issue 14's checks again on frames cropped by a pixel (a quick run: 1 px only)
+    crop_row = next(r for r in targets if "cropped by 1 px" in r[0])
+    assert re.fullmatch(r"\d+; \d+", crop_row[2]), crop_row
     # issue 13's time row: each test sequence, seahough's ms against ORB+RANSAC's
     # (a quick run has half size only)
     assert targets[-1][0].startswith("median CPU ms a pair from scratch, half size")
@@ -156,6 +159,12 @@ def test_real_pairs_benchmark_quick(tmp_path):
     assert sum(int(r[2]) for r in refs) == 8 and len(refs) == 5
     odo = _rows(_section(text, "## Dead reckoning"))[1:]
     assert len(odo) == 5 and all(re.match(r"\d+/\d+", r[3]) for r in odo)
+    # the runs on cropped frames beside the main one, which they must repeat in form
+    crops = _rows(_section(text, "## The same frames cropped"))
+    assert [r[0] for r in crops[1:]] == ["0", "1"]
+    assert crops[1][1:3] == [targets[0][2], targets[1][2]], (crops, targets)
+    assert crops[2][1].split()[0].split("/")[1] == crops[1][1].split()[0].split("/")[1]
+    assert all(re.match(r"\d+/8 ", r[4]) for r in crops[1:]), crops
 
 
 def test_relief_benchmark_quick(tmp_path):
