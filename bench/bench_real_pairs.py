@@ -393,7 +393,8 @@ def _crop_misses(shifted) -> list[str]:
                   fnum(100 * x["ans"]["seahough"]["err"] / diagonal(x["shape"])),
                   f"{x['ans']['seahough']['nfa']:.3g}", fnum(x["ans"]["seahough"]["confidence"]),
                   "-", "-"]
-                 for x in r if x["ans"]["seahough"]["err"] > WRONG * diagonal(x["shape"])]
+                 for x in r if x["ans"]["seahough"]["matrix"] is not None
+                 and x["ans"]["seahough"]["err"] > WRONG * diagonal(x["shape"])]
         rows += [[c, o["seq"], "native", "step", f"{s['pair']}-{s['pair'] + 1}",
                   fnum(100 * s["err"] / diagonal(o["shape"])),
                   "-" if s["nfa"] is None else f"{s['nfa']:.3g}", fnum(s["confidence"]),

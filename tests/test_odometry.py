@@ -774,7 +774,8 @@ def _step_disagreements(tmp_path, sequence, limit=10.0, config=None):
             # that every other pair says moved a few px; a pair it measured as a
             # homography, coarse to fine, reports the homography's least-squares
             # similarity over the frame: on the pool's perspective change 15-33 px
-            # from the vote's, which the dead reckoning reports)
+            # from the vote's, which the dead reckoning reports against an older
+            # keyframe; its searches of the adjacent frame are measured the same way)
         step = compose(np.reshape(b["matrix"], (2, 3)), invert_matrix(np.reshape(a["matrix"], (2, 3))))
         err = float(np.max(np.hypot(*(apply_matrix(step, grid) - apply_matrix(m.matrix, grid)).T)))
         compared += 1

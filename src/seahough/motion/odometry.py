@@ -100,7 +100,9 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     scale_range, angle_range : (float, float)
         Size change and turn (degrees, counter-clockwise as displayed)
         possible between consecutive frames; a range of one value is a known
-        quantity (``(1, 1), (0, 0)``: constant altitude and heading).
+        quantity (``(1, 1), (0, 0)``: constant altitude and heading). The
+        vote searches these ranges; a pair measured as a homography (below)
+        may end outside them.
     resume : bool
         Continue from an ``odometry.csv`` already in ``out_dir``: frames
         measured there are kept, the state (poses, keyframe, velocity) is
@@ -163,8 +165,16 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
        measured frame, with twice the full search's shift region (+-a whole
        frame) and the ranges widened as for twice the frames (``scale_range``
        squared, ``angle_range`` doubled; known quantities stay known); it
-       then becomes the keyframe. A sudden jump, turn or change of altitude
+       then becomes the keyframe. A sudden jump or change of altitude
        beyond the per-frame ranges is measured here, not flagged.
+
+    A search of the adjacent frame without a prior (the first pair, 2. while
+    the keyframe is the previous frame, 3., 4. one frame on) is measured as
+    :func:`~seahough.estimate_motion` measures a pair: coarse to fine and a
+    check of the candidates as homographies when the vote cannot vouch for
+    its answer (a repeated texture, a camera that looks ahead), so that its
+    turn may lie outside ``angle_range`` (a 30-degree turn under the default
+    +-20 is measured by 3.).
 
     A keyframe measurement of confidence below 0.35 (an old keyframe, or a
     look-alike of it: a tile or a ripple one period on) is checked by a full
