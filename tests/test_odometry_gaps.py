@@ -203,6 +203,22 @@ def test_a_sudden_turn_beyond_the_angle_range_is_measured(tmp_path):
     assert max(errors) < 0.5, errors
 
 
+def test_a_sharper_turn_is_measured_by_the_wide_try(tmp_path, monkeypatch):
+    # 34 degrees in one frame: beyond what the previous frame's try reaches from
+    # the range's edge, inside the wide try's (-40, 40); with the wide try's
+    # ranges not widened (WIDEN 1) the frame is flagged
+    poses = [(400 + 12 * k, 350) for k in range(6)] + [(472 + 12 * k, 350, 34.0)
+                                                        for k in range(4)]
+    res, errors = _cut_run(tmp_path / "a", poses)
+    r = res.rows[6]
+    assert (r["status"], r["method"], r["ref"]) == ("measured", "wide", 5), r
+    assert abs(r["rotation"]) == pytest.approx(34.0, abs=0.3)
+    assert max(errors) < 0.5, errors
+    monkeypatch.setattr(O, "WIDEN", 1)
+    res1, _ = _cut_run(tmp_path / "b", poses)
+    assert res1.rows[6]["status"] == "assumed"
+
+
 # ---------------------------------------------------------------- resume stays exact
 @pytest.mark.parametrize("cut", [6, 7])
 def test_resume_across_an_assumed_pose_is_exact(tmp_path, cut):

@@ -165,7 +165,7 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
        measured frame, with twice the full search's shift region (+-a whole
        frame) and the ranges widened as for twice the frames (``scale_range``
        squared, ``angle_range`` doubled; known quantities stay known); it
-       then becomes the keyframe. A sudden jump or change of altitude
+       then becomes the keyframe. A sudden jump, turn or change of altitude
        beyond the per-frame ranges is measured here, not flagged.
 
     A search of the adjacent frame without a prior (the first pair, 2. while
