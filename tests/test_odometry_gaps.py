@@ -188,35 +188,26 @@ def test_a_jump_beyond_the_full_search_is_measured_by_the_wide_try(tmp_path, mon
     assert res1.rows[6]["status"] == "assumed" and res1.summary["flagged_pairs"] == 1
 
 
-def test_a_sudden_turn_beyond_the_angle_range_is_measured(tmp_path):
-    # a turn of 30 degrees in one frame: outside angle_range (-20, 20). The
-    # previous frame's try, a search of the adjacent frame without a prior, is
-    # measured as estimate_motion measures a pair (coarse to fine when the vote
-    # cannot vouch for its answer), and gets it exactly; before that (2026-12-06)
-    # only the wide try's (-40, 40) found it
-    poses = [(400 + 12 * k, 350) for k in range(6)] + [(472 + 12 * k, 350, 30.0)
+@pytest.mark.parametrize("turn, method", [(30.0, "previous"), (34.0, "wide")])
+def test_a_sudden_turn_beyond_the_angle_range_is_measured(tmp_path, monkeypatch, turn, method):
+    # a turn in one frame outside angle_range (-20, 20). 30 degrees: the previous
+    # frame's try, a search of the adjacent frame without a prior, is measured as
+    # estimate_motion measures a pair (coarse to fine when the vote cannot vouch
+    # for its answer), and gets it exactly (before 2026-12-06 only the wide try
+    # did). 34 degrees: beyond what that try reaches from the range's edge,
+    # inside the wide try's (-40, 40); with the wide try's ranges not widened
+    # (WIDEN 1) the frame is flagged
+    poses = [(400 + 12 * k, 350) for k in range(6)] + [(472 + 12 * k, 350, turn)
                                                         for k in range(4)]
     res, errors = _cut_run(tmp_path / "a", poses)
     r = res.rows[6]
-    assert (r["status"], r["method"], r["ref"]) == ("measured", "previous", 5), r
-    assert abs(r["rotation"]) == pytest.approx(30.0, abs=0.3)
+    assert (r["status"], r["method"], r["ref"]) == ("measured", method, 5), r
+    assert abs(r["rotation"]) == pytest.approx(turn, abs=0.3)
     assert max(errors) < 0.5, errors
-
-
-def test_a_sharper_turn_is_measured_by_the_wide_try(tmp_path, monkeypatch):
-    # 34 degrees in one frame: beyond what the previous frame's try reaches from
-    # the range's edge, inside the wide try's (-40, 40); with the wide try's
-    # ranges not widened (WIDEN 1) the frame is flagged
-    poses = [(400 + 12 * k, 350) for k in range(6)] + [(472 + 12 * k, 350, 34.0)
-                                                        for k in range(4)]
-    res, errors = _cut_run(tmp_path / "a", poses)
-    r = res.rows[6]
-    assert (r["status"], r["method"], r["ref"]) == ("measured", "wide", 5), r
-    assert abs(r["rotation"]) == pytest.approx(34.0, abs=0.3)
-    assert max(errors) < 0.5, errors
-    monkeypatch.setattr(O, "WIDEN", 1)
-    res1, _ = _cut_run(tmp_path / "b", poses)
-    assert res1.rows[6]["status"] == "assumed"
+    if method == "wide":
+        monkeypatch.setattr(O, "WIDEN", 1)
+        res1, _ = _cut_run(tmp_path / "b", poses)
+        assert res1.rows[6]["status"] == "assumed"
 
 
 # ---------------------------------------------------------------- resume stays exact
