@@ -3,12 +3,14 @@ measured where parallax spoils a single similarity (motion/parallax.py)."""
 
 import math
 
+import cv2
 import numpy as np
 import pytest
 
 import seahough
 from seahough import sim
 from seahough.errors import ParameterError
+from seahough.motion import pair
 from seahough.motion import parallax as P
 
 from conftest import data_path
@@ -105,6 +107,44 @@ def test_parallax_that_spoils_the_similarity_is_measured_tile_by_tile(monkeypatc
     for check in ("coarse_to_fine", "check_perspective"):
         monkeypatch.setattr(pair, check, lambda *a, **k: None)
     assert seahough.estimate_motion(frames[0], frames[1]) is None
+
+
+def _both_checks(monkeypatch):
+    """Spy on estimate_motion's check tile by tile: each call's answer with the
+    shortcut it was asked for, and without it."""
+    seen = []
+
+    def spy(*a, **k):
+        seen.append((P.check_locally(*a, **k),
+                     P.check_locally(*a, **{n: v for n, v in k.items() if n != "min_distinct"}),
+                     k.get("min_distinct", 0.0)))
+        return seen[-1][0]
+
+    monkeypatch.setattr(pair, "check_locally", spy)
+    return seen
+
+
+def test_the_check_tile_by_tile_is_skipped_when_no_answer_could_be_distinct(monkeypatch):
+    # the real tiled pool, frames 1 -> 2: whatever pose the check would
+    # choose, the vote's runner-up is too near it (a tile's look-alike) to
+    # rescue the pair; min_distinct says so before a tile is measured
+    files = seahough.list_frames(data_path("sequences", "subvo_pool_chain"))
+    frames = [cv2.imread(str(f)) for f in files[1:3]]
+    seen = _both_checks(monkeypatch)
+    seahough.estimate_motion(*frames)
+    assert seen and seen[0][2] == pair.RESCUE_DISTINCT
+    short, full, _ = seen[0]
+    assert short is None and full is not None and full.distinct < pair.RESCUE_DISTINCT
+    # a pose the vote found distinct is measured as without the shortcut, and
+    # rescues its pair (the reef in relief of the test above)
+    seen.clear()
+    relief, _ = sim.relief_sequence(source=data_path("sequences", "dtu_seabed_pair",
+                                                     "scene1.png"),
+                                    n_frames=2, relief=0.18, seed=6, water="moderate")
+    assert seahough.estimate_motion(*relief) is not None
+    short, full, _ = seen[0]
+    assert full.distinct >= pair.RESCUE_DISTINCT
+    assert np.array_equal(short.matrix, full.matrix) and short.score == full.score
 
 
 def test_unrelated_frames_are_not_made_a_match_by_the_tiles_freedom():

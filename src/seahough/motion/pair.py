@@ -374,7 +374,7 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
     check = None
     if res.candidates:
         check = check_locally(pattern, res, d, region, scale_range, angle_range, config,
-                              frame=frame)
+                              frame=frame, min_distinct=RESCUE_DISTINCT)
     if check is not None and check.distinct >= RESCUE_DISTINCT:
         # (a peak the vote hardly prefers to its runner-up is a look-alike of a
         # repeated texture as often as a view spoilt by parallax: not rescued)

@@ -310,7 +310,8 @@ def _candidate_matrix(pose, owx: float, owy: float) -> np.ndarray:
 
 
 def check_locally(pattern, result, detection, region, scale_range, angle_range, config,
-                  candidates: int = CANDIDATES, frame=None) -> LocalCheck | None:
+                  candidates: int = CANDIDATES, frame=None,
+                  min_distinct: float = 0.0) -> LocalCheck | None:
     """Choose a frame pair's motion by its evidence measured tile by tile.
 
     ``pattern`` is the previous frame (:meth:`~seahough.Pattern.from_frame`),
@@ -329,7 +330,9 @@ def check_locally(pattern, result, detection, region, scale_range, angle_range, 
     fitted to the chosen pose's tile shifts; ``parallax`` is measured
     against it. None when too little of the frame is in view to cut it
     into tiles. ``frame``: the previous frame's :func:`frame_points` at
-    the search's working scale, when already made.
+    the search's working scale, when already made. ``min_distinct``: None
+    as well, without measuring a tile, when no pose that could be chosen is
+    that distinct in the vote (a caller that would discard such an answer).
     """
     feats = result.features
     if feats is None:
@@ -362,6 +365,16 @@ def check_locally(pattern, result, detection, region, scale_range, angle_range, 
     def gap(a, b):
         return float(np.hypot(*(a - b).T).max())
 
+    def distinct_at(a):
+        # how distinct the vote found the pose at corners ``a``: 1 - runner-up / own
+        gaps = [gap(c, a) for c in cand_at]
+        own = cands[int(np.argmin(gaps))].work_score
+        rival = max((c.work_score for c, g in zip(cands, gaps) if g > SAME), default=0.0)
+        return float(np.clip(1.0 - rival / max(own, 1e-9), 0.0, 1.0))
+
+    if min_distinct > 0 and (not cands or max(map(distinct_at, at)) < min_distinct):
+        return None
+
     # the tiles may not shift as far as the nearest rival peak of the vote: a
     # repeated texture's look-alikes (pool tiles) lie a period apart
     near = min((g for g in (gap(a, at[0]) for a in cand_at) if g > SAME), default=np.inf)
@@ -381,12 +394,9 @@ def check_locally(pattern, result, detection, region, scale_range, angle_range, 
     conf = float(np.clip((ev.score - runner) / max(1.0 - runner, 1e-9), 0.0, 1.0))
     # ... and as distinct in the vote: a repeated texture's look-alikes (tiles)
     # each fit well tile by tile, and not every one of them is a candidate
-    gaps = [gap(a, at[best]) for a in cand_at]
     distinct = 0.0
     if cands:
-        own = cands[int(np.argmin(gaps))].work_score
-        rival = max((c.work_score for c, g in zip(cands, gaps) if g > SAME), default=0.0)
-        distinct = float(np.clip(1.0 - rival / max(own, 1e-9), 0.0, 1.0))
+        distinct = distinct_at(at[best])
         conf = min(conf, distinct)
     # the motion: the similarity that fits the chosen pose's tiles' shifts
     # (the parts of the frame say where it is; a finish at full resolution
