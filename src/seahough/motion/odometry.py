@@ -446,9 +446,10 @@ def _measure_frame(row, i, gray, feats, st: State, searcher: _Searcher, load):
         _assume(row, st, "low_confidence" if "low_confidence" in reasons else (
             "little_overlap" if "little_overlap" in reasons else "no_match"))
         return
+    # (off the prior twice running: the prior does not hold here)
+    rough = res.method != "prior" and st.last_method != "prior"
     if res.ref == st.key and st.meas is not None and st.meas != st.key and (
-            res.confidence < searcher.tuning.doubtful or "prior" not in (res.method,
-                                                                         st.last_method)):
+            res.confidence < searcher.tuning.doubtful or rough):
         res = _checked(res, i, gray, feats, st, searcher, load, ref_rate)
     row["status"] = "measured"
     row["_cum"] = compose(res.matrix, ref_cum(st, res.ref))
@@ -480,10 +481,10 @@ def _checked(res, i, gray, feats, st: State, searcher: _Searcher, load, ref_rate
     old keyframe's peak can be a look-alike (a tile, a ripple one period on)
     that the nearer frame does not share, and an old keyframe of a scene in
     relief is off by more than its confidence says. Doubtful: less confident
-    than ``OdometryTuning.doubtful``, or found or preceded by a search other
-    than the prior's (the run is where the prior does not hold: a camera
-    that looks ahead, a tiled floor, a turn), never on the smooth path of
-    prior after prior. When the two disagree, the nearer frame's
+    than ``OdometryTuning.doubtful``, or found by a search other than the
+    prior's right after a frame that was too (or was flagged): the run is
+    where the prior does not hold (a camera that looks ahead, a tiled floor,
+    a turn). A run on the prior is not checked above that confidence. When the two disagree, the nearer frame's
     measurement replaces it if that frame is the adjacent one (the pair
     with the most overlap and the least change of view, measured as
     estimate_motion measures a pair), else only if it is more confident.
@@ -495,7 +496,9 @@ def _checked(res, i, gray, feats, st: State, searcher: _Searcher, load, ref_rate
     2 % in 6 of those, and within 2 % (and nearer the truth) in all 6 right
     ones. Steps off by more than 3 % 20 -> 14 of 354, within 2 % 322 ->
     329. Checking every keyframe measurement did the same there but
-    quadrupled a downward survey's prior pairs (10 -> 43 ms at 640x480)."""
+    quadrupled a downward survey's prior pairs (10 -> 43 ms at 640x480);
+    checking also those on the prior after one search off it made the
+    amphora wreck's pairs on the prior 2x slower at the median."""
     # a full search: in the small prior window a look-alike has only one
     # runner-up to be measured against (on the tiled pool it confirmed itself)
     n = i - st.meas
