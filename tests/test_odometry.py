@@ -544,6 +544,25 @@ def test_resume_gives_the_same_result(tmp_path):
         run_odometry(paths[::-1], tmp_path / "resumed", resume=True, progress=False)
 
 
+def test_a_resume_rebuilds_the_last_rows_search_from_the_csv(tmp_path):
+    # the keyframe check depends on the last row's search (State.last_method):
+    # rebuilt from the CSV's rows, it is what the run had, row after row
+    from seahough.config import OdometryTuning
+    from seahough.motion.state import State, advance
+    from seahough.motion.track import iter_odometry_csv
+    frames, _ = _sequence("turn", n=8, seed=8)
+    frames[5] = np.full_like(frames[5], 90)               # a frame that cannot be measured
+    res = run_odometry(frames, tmp_path / "run", progress=False, mosaic=False, workers=1)
+    st = State(shape=frames[0].shape[:2])
+    seen = []
+    for r in iter_odometry_csv(res.csv_path):
+        r["_cum"] = None if r["matrix"] is None else np.asarray(r["matrix"], float).reshape(2, 3)
+        advance(st, r, OdometryTuning())
+        seen.append(st.last_method)
+    want = [r["method"] if r["status"] == "measured" else "" for r in res.rows]
+    assert seen == want and "prior" in want and "" in want[1:], want
+
+
 _KILL_SCRIPT = """
 import sys, time
 import seahough.motion.odometry as O

@@ -379,9 +379,9 @@ class OdometryTuning:
     max_span : int
         ... and the ranges widened for at most this many frames of gap.
     doubtful : float
-        A keyframe measurement less confident than this (or found by a
-        search other than the prior's right after a frame that was too) is
-        checked against the last measured frame (nearer in time) ...
+        A keyframe measurement less confident than this (or found without
+        the prior right after a frame measured without it too, or assumed)
+        is checked against the last measured frame (nearer in time) ...
     agree_px : float
         ... which replaces it when they differ by more than this many working
         pixels at the frame's corners (beyond a measurement's noise) and it

@@ -177,11 +177,13 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     +-20 is measured by 3.).
 
     A keyframe measurement of confidence below 0.35 (an old keyframe, or a
-    look-alike of it: a tile or a ripple one period on) is checked by a full
-    search against the last measured frame, nearer in time; that one
-    replaces it when the two differ by more than 2 working pixels at the
-    frame's corners (more than a measurement's noise: an aging keyframe of
-    a scene in relief drifts too) and it is more confident. It is then
+    look-alike of it: a tile or a ripple one period on), or one found by the
+    full search (2.) right after a frame measured without the prior too (or
+    assumed: the prior does not hold there), is checked by a full search
+    against the last measured frame, nearer in time; that one replaces it
+    when the two differ by more than 2 working pixels at the frame's corners
+    (more than a measurement's noise: an aging keyframe of a scene in relief
+    drifts too) and it is the adjacent frame, or more confident. It is then
     reported as method ``previous``, with ``ref`` the frame it was measured
     against (the last measured one, which is the previous frame unless
     frames in between were assumed).
@@ -446,10 +448,7 @@ def _measure_frame(row, i, gray, feats, st: State, searcher: _Searcher, load):
         _assume(row, st, "low_confidence" if "low_confidence" in reasons else (
             "little_overlap" if "little_overlap" in reasons else "no_match"))
         return
-    # (off the prior twice running: the prior does not hold here)
-    rough = res.method != "prior" and st.last_method != "prior"
-    if res.ref == st.key and st.meas is not None and st.meas != st.key and (
-            res.confidence < searcher.tuning.doubtful or rough):
+    if _doubtful(res, st, searcher.tuning):
         res = _checked(res, i, gray, feats, st, searcher, load, ref_rate)
     row["status"] = "measured"
     row["_cum"] = compose(res.matrix, ref_cum(st, res.ref))
@@ -476,25 +475,52 @@ def _assume(row, st: State, why: str) -> None:
     row["flags"] = f"{why}; pose_assumed: {how} since frame {st.meas}"
 
 
+def _doubtful(res, st: State, tuning) -> bool:
+    """Whether a measurement against the keyframe (two or more frames back)
+    is checked by :func:`_checked`: less confident than ``tuning.doubtful``,
+    or found by a search other than the prior's right after a frame that
+    was too (``st.last_method``: the last row's search, "" when its pose was
+    assumed; off the prior twice running, the prior does not hold here).
+
+    >>> from seahough.config import OdometryTuning
+    >>> from seahough.motion.searcher import Measure
+    >>> st = State(key=3, meas=5, last_method="prior")
+    >>> full = Measure(np.eye(2, 3), 0.6, 0.5, 0.8, ref=3, method="full")
+    >>> _doubtful(full, st, OdometryTuning())          # one search off the prior
+    False
+    >>> st.last_method = "full"
+    >>> _doubtful(full, st, OdometryTuning())          # two running
+    True
+    >>> prior = Measure(np.eye(2, 3), 0.6, 0.5, 0.8, ref=3, method="prior")
+    >>> _doubtful(prior, st, OdometryTuning()), _doubtful(
+    ...     Measure(np.eye(2, 3), 0.3, 0.5, 0.8, ref=3, method="prior"), st, OdometryTuning())
+    (False, True)
+    """
+    if res.ref != st.key or st.meas is None or st.meas == st.key:
+        return False
+    rough = res.method != "prior" and st.last_method != "prior"
+    return res.confidence < tuning.doubtful or rough
+
+
 def _checked(res, i, gray, feats, st: State, searcher: _Searcher, load, ref_rate):
     """A doubtful keyframe measurement against the last measured frame: an
     old keyframe's peak can be a look-alike (a tile, a ripple one period on)
     that the nearer frame does not share, and an old keyframe of a scene in
-    relief is off by more than its confidence says. Doubtful: less confident
-    than ``OdometryTuning.doubtful``, or found by a search other than the
-    prior's right after a frame that was too (or was flagged): the run is
-    where the prior does not hold (a camera that looks ahead, a tiled floor,
-    a turn). A run on the prior is not checked above that confidence. When the two disagree, the nearer frame's
-    measurement replaces it if that frame is the adjacent one (the pair
-    with the most overlap and the least change of view, measured as
-    estimate_motion measures a pair), else only if it is more confident.
+    relief is off by more than its confidence says. Doubtful:
+    :func:`_doubtful` (the run is where the prior does not hold: a camera
+    that looks ahead, a tiled floor, a turn; a run on the prior is not
+    checked above ``OdometryTuning.doubtful``). When the two disagree, the
+    nearer frame's measurement replaces it if that frame is the adjacent
+    one (the pair with the most overlap and the least change of view,
+    measured as estimate_motion measures a pair), else only if it is more
+    confident.
 
     Chosen on the dev part of bench/bench_oblique.py (40 rendered tiled
     floors seen by a forward-oblique camera, seeds 200-239, 10-frame runs):
     of 14 keyframe measurements two or more frames back, 8 were look-alikes
-    3-23 % of the diagonal off; the adjacent frame's measurement was within
-    2 % in 6 of those, and within 2 % (and nearer the truth) in all 6 right
-    ones. Steps off by more than 3 % 20 -> 14 of 354, within 2 % 322 ->
+    9-24 % of the diagonal off at confidence 0.26-0.82; the adjacent
+    frame's measurement was within 2 % in 6 of those, and within 2 % (and
+    nearer the truth) in all 6 right ones. Steps off by more than 3 % 20 -> 14 of 354, within 2 % 322 ->
     329. Checking every keyframe measurement did the same there but
     quadrupled a downward survey's prior pairs (10 -> 43 ms at 640x480);
     checking also those on the prior after one search off it made the
