@@ -173,13 +173,61 @@ def images(quick: bool):
             items.append((f"sim on {split} photos", split, f"seed {seed} {water}",
                           lambda s=seed, w=water, src=src: [S.negative_scene(
                               (480, 640), water=w, seed=s, source=src)], NATURAL_SEARCHES))
-    pool = sorted((base / "objects" / "robosub_transdec" / "images").glob("*.jpg"),
-                  key=lambda p: int(re.findall(r"\d+", p.name)[0]))
-    pool = [p for p in pool if int(re.findall(r"\d+", p.name)[0]) >= 100]  # (0-99: renders)
+    pool = pool_photos(base)
     for p in pool[:2] if quick else pool:
         items.append(("pool photos (RoboSub)", "test", p.name, lambda p=p: [cv2.imread(str(p))],
                       POOL_PATTERNS))
     return items
+
+
+def pool_photos(base: Path) -> list:
+    """The RoboSub pool photos (frames 100 and up: 0-99 are renders)."""
+    pool = sorted((base / "objects" / "robosub_transdec" / "images").glob("*.jpg"),
+                  key=lambda p: int(re.findall(r"\d+", p.name)[0]))
+    return [p for p in pool if int(re.findall(r"\d+", p.name)[0]) >= 100]
+
+
+def pool_split(quick: bool) -> str:
+    """The false alarms of the pool photos at the Detector's defaults, told
+    apart by where they lie: on a prop that others labelled in the photo
+    (the box grown by half its size on every side: a ring on a round buoy,
+    a cross on the torpedo board's holes; a look-alike that is there, not
+    chance) or elsewhere. A markdown table; the counts stay those of the
+    calibration (every detection is a false alarm: neither pattern is in
+    the pool)."""
+    from bench_robosub import parse_voc
+    base = shared_data_dir()
+    pats = patterns()
+    photos = pool_photos(base)[:20] if quick else pool_photos(base)
+    where: dict = {}
+    props: dict = {}
+    for p in photos:
+        img = cv2.imread(str(p))
+        xml = base / "objects" / "robosub_transdec" / "annotations" / (p.stem + ".xml")
+        boxes = parse_voc(xml.read_text()) if xml.exists() else []
+        for name in POOL_PATTERNS:
+            for d in seahough.Detector(pats[name]).detect(img):
+                on = [b for b in boxes if b.x0 - b.w / 2 <= d.x <= b.x1 + b.w / 2
+                      and b.y0 - b.h / 2 <= d.y <= b.y1 + b.h / 2]
+                key = (name, "on a labelled prop" if on else "elsewhere")
+                where[key] = where.get(key, 0) + 1
+                for label in sorted({b.name for b in on}):
+                    props[(name, label)] = props.get((name, label), 0) + 1
+    n = len(photos)
+    lines = ["| pattern | searches | false alarms a search | on a labelled prop | elsewhere "
+             "| the props they lie on |", "|---|---|---|---|---|---|"]
+    for name in POOL_PATTERNS:
+        on, off = where.get((name, "on a labelled prop"), 0), where.get((name, "elsewhere"), 0)
+        labels = ", ".join(f"{lab} {k}" for (pn, lab), k in sorted(props.items(),
+                                                                    key=lambda t: -t[1])
+                           if pn == name) or "-"
+        lines.append(f"| {name} | {n} | {(on + off) / n:.3f} | {on / n:.3f} | {off / n:.3f} "
+                     f"| {labels} |")
+    on = sum(v for (_, w), v in where.items() if w != "elsewhere")
+    off = sum(v for (_, w), v in where.items() if w == "elsewhere")
+    lines.append(f"| both | {2 * n} | {(on + off) / (2 * n):.3f} | {on / (2 * n):.3f} | "
+                 f"{off / (2 * n):.3f} | |")
+    return "\n".join(lines)
 
 
 #: The DEPENDENCE values (pixels of edge) every detection's NFA is also
@@ -418,7 +466,17 @@ def main(argv=None) -> int:
     ap.add_argument("--fit", action="store_true", help="fit DEPENDENCE and a share of tries on the tune part (a calibrated model)")
     ap.add_argument("--cache", type=Path, help="reuse (or write) the collected evidence here")
     ap.add_argument("--write", action="store_true", help="write docs/nfa_calibration.md and the plot")
+    ap.add_argument("--pool-split", action="store_true",
+                    help="only the pool photos' false alarms at the defaults, on labelled props "
+                         "and elsewhere (a table, ~3 min)")
     a = ap.parse_args(argv)
+    if a.pool_split:
+        if shared_data_dir() is None:
+            print("bench_nfa: ../shared/data not found", file=sys.stderr)
+            return 2
+        print(f"Command: `{command()}`  \nDate: {time.strftime('%Y-%m-%d')}  \n"
+              f"Machine: {machine()}\n\n{pool_split(a.quick)}")
+        return 0
     if a.cache and a.cache.exists():
         data = json.loads(a.cache.read_text())
         data["searches"] = [tuple(s) for s in data["searches"]]

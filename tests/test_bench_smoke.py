@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import run_bench_code
+from conftest import DATA, run_bench_code
 from seahough._data import shared_data_dir
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -345,6 +345,23 @@ def test_robosub_benchmark_quick(tmp_path):
             assert photos == "3", r                           # the quick run's 3 test photos
             assert float(r[col["test ms"]]) > 0, r
 
+
+
+def test_nfa_pool_split_quick():
+    """bench_nfa --pool-split --quick: the pool photos' false alarms at the
+    defaults, each pattern's rate split into those on a labelled prop and the
+    rest (the two add up to the whole), over 20 photos."""
+    if DATA is None:
+        pytest.skip("real data (../shared/data) is not present beside this checkout")
+    text = run_bench_code("import bench_nfa; bench_nfa.main(['--pool-split', '--quick'])")
+    rows = {r[0]: r for r in (line.strip().strip("|").split("|") for line in text.splitlines()
+                              if line.startswith("| cross |") or line.startswith("| ring |")
+                              or line.startswith("| both |"))}
+    assert {k.strip() for k in rows} == {"cross", "ring", "both"}, rows
+    for name, r in rows.items():
+        n, total, on, off = int(r[1]), float(r[2]), float(r[3]), float(r[4])
+        assert n == (40 if name.strip() == "both" else 20), r
+        assert abs(on + off - total) <= 0.0015 and min(on, off) >= 0.0, r
 
 
 def test_nfa_calibration_benchmark_quick():
