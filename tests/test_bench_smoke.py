@@ -134,7 +134,13 @@ def test_real_pairs_benchmark_quick(tmp_path):
     assert "Machine:" in text and "Command:" in text and "Date:" in text
     assert "Split: tune part = sparus_auv_seabed, skerki_mud_pair" in text
     targets = _rows(_section(text, "## Targets"))[1:]
-    assert len(targets) == 7 and all(r[-1] in ("met", "**missed**") for r in targets)
+    assert len(targets) == 9 and all(r[-1] in ("met", "**missed**") for r in targets)
+    # issue 13's dead reckoning: every sequence's pairs measured, and its median step
+    # error against the spread of the two fits
+    measured = next(r for r in targets if r[0].startswith("dead reckoning: consecutive"))
+    assert all(re.fullmatch(r"\S+ \d+/\d+", c.strip()) for c in measured[2].split(";"))
+    spread = next(r for r in targets if r[0].startswith("dead reckoning: median step error"))
+    assert re.fullmatch(r"\S+ [\d.]+ / [\d.]+(; \S+ [\d.]+ / [\d.]+)*", spread[2]), spread
     # issue 14's checks again on frames cropped by a pixel (a quick run: 1 px only)
     crop_row = next(r for r in targets if "cropped by 1 px" in r[0])
     assert re.fullmatch(r"\d+; \d+", crop_row[2]), crop_row
