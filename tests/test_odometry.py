@@ -818,6 +818,48 @@ def test_tile_look_alikes_are_flagged_not_measured(tmp_path):
     assert bad == [] and compared >= 4, (bad, compared)   # (not vacuous: 4 of 11 pairs)
 
 
+def _sift_similarity(a, b):
+    """SIFT + ratio test + RANSAC similarity from image file ``a`` to ``b``
+    (an independent reference), and its number of inliers."""
+    ga, gb = (cv2.imread(f, cv2.IMREAD_GRAYSCALE) for f in (a, b))
+    sift = cv2.SIFT_create()
+    (ka, da), (kb, db) = sift.detectAndCompute(ga, None), sift.detectAndCompute(gb, None)
+    good = [p for p, q in cv2.BFMatcher().knnMatch(da, db, k=2) if p.distance < 0.75 * q.distance]
+    src = np.float32([ka[m.queryIdx].pt for m in good])
+    dst = np.float32([kb[m.trainIdx].pt for m in good])
+    m, inliers = cv2.estimateAffinePartial2D(src, dst, method=cv2.RANSAC,
+                                             ransacReprojThreshold=3.0)
+    return m, int(inliers.sum())
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "issue 14, open: two pool steps on the prior against keyframe 4 are 50-60 px from "
+    "SIFT+RANSAC (3.3-4.0 % of the diagonal from bench_real_pairs.py's reference), under "
+    "NFA 1; checking every keyframe answer fixed them but quadrupled a downward survey's "
+    "prior pairs (docs/odometry.md)"))
+def test_every_pool_step_agrees_with_an_independent_feature_fit(tmp_path):
+    # the tiled pool (a forward-oblique camera): no step may be a tile-shifted
+    # look-alike or a keyframe answer a few frames back that drifted off
+    # (2026-12-06: steps on the prior against a keyframe 2-3 frames back, 50-60
+    # px off SIFT; the test above, against estimate_motion, does not see them).
+    # Every measured step against SIFT+RANSAC on the same pair (600+ inliers on
+    # each): within 2.5 % of the diagonal (37 px). (Not against estimate_motion:
+    # on this pool its similarity vote is itself 27-30 px from SIFT on three
+    # pairs: the perspective change a similarity leaves out.)
+    files = [str(p) for p in list_frames(data_path("sequences", "subvo_pool_chain"))]
+    rows = run_odometry(files, tmp_path, mosaic=False, progress=False, workers=1).rows
+    h, w = seahough.to_gray(files[0]).shape
+    grid = np.array([[x, y] for x in np.linspace(0, w - 1, 5) for y in np.linspace(0, h - 1, 5)])
+    errors = []
+    for a, b in zip(rows, rows[1:]):
+        assert b["status"] == "measured", b
+        step = compose(np.reshape(b["matrix"], (2, 3)), invert_matrix(np.reshape(a["matrix"], (2, 3))))
+        ref, inliers = _sift_similarity(files[a["index"]], files[b["index"]])
+        assert inliers >= 600
+        errors.append(float(np.max(np.hypot(*(apply_matrix(step, grid) - apply_matrix(ref, grid)).T))))
+    assert max(errors) < 0.025 * math.hypot(w, h), [round(e, 1) for e in errors]
+
+
 def test_an_aging_keyframe_of_a_scene_in_relief_gives_way_to_the_nearer_frame(tmp_path):
     # the amphora wreck (3-D relief): a keyframe three frames back measured
     # frame 17 14 px off at the corners (confidence 0.29) where the adjacent
