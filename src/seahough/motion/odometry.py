@@ -520,11 +520,12 @@ def _checked(res, i, gray, feats, st: State, searcher: _Searcher, load, ref_rate
     of 14 keyframe measurements two or more frames back, 8 were look-alikes
     9-24 % of the diagonal off at confidence 0.26-0.82; the adjacent
     frame's measurement was within 2 % in 6 of those, and within 2 % (and
-    nearer the truth) in all 6 right ones. Steps off by more than 3 % 20 -> 14 of 354, within 2 % 322 ->
-    329. Checking every keyframe measurement did the same there but
-    quadrupled a downward survey's prior pairs (10 -> 43 ms at 640x480);
-    checking also those on the prior after one search off it made the
-    amphora wreck's pairs on the prior 2x slower at the median."""
+    nearer the truth) in all 6 right ones. Steps off by more than 3 %
+    20 -> 14 of 354, within 2 % 322 -> 329. Checking every keyframe
+    measurement did the same there but quadrupled a downward survey's prior
+    pairs (10 -> 43 ms at 640x480); checking also those on the prior after
+    one search off it made the amphora wreck's pairs on the prior 2x slower
+    at the median."""
     # a full search: in the small prior window a look-alike has only one
     # runner-up to be measured against (on the tiled pool it confirmed itself)
     n = i - st.meas
