@@ -50,6 +50,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from collections import Counter
 import math
 import re
 import sys
@@ -199,8 +200,8 @@ def pool_split(quick: bool) -> str:
     base = shared_data_dir()
     pats = patterns()
     photos = pool_photos(base)[:20] if quick else pool_photos(base)
-    where: dict = {}
-    props: dict = {}
+    where: Counter = Counter()
+    props: Counter = Counter()
     for p in photos:
         img = cv2.imread(str(p))
         xml = base / "objects" / "robosub_transdec" / "annotations" / (p.stem + ".xml")
@@ -209,22 +210,19 @@ def pool_split(quick: bool) -> str:
             for d in seahough.Detector(pats[name]).detect(img):
                 on = [b for b in boxes if b.x0 - b.w / 2 <= d.x <= b.x1 + b.w / 2
                       and b.y0 - b.h / 2 <= d.y <= b.y1 + b.h / 2]
-                key = (name, "on a labelled prop" if on else "elsewhere")
-                where[key] = where.get(key, 0) + 1
-                for label in sorted({b.name for b in on}):
-                    props[(name, label)] = props.get((name, label), 0) + 1
+                where[name, bool(on)] += 1
+                props.update((name, label) for label in {b.name for b in on})
     n = len(photos)
     lines = ["| pattern | searches | false alarms a search | on a labelled prop | elsewhere "
              "| the props they lie on |", "|---|---|---|---|---|---|"]
     for name in POOL_PATTERNS:
-        on, off = where.get((name, "on a labelled prop"), 0), where.get((name, "elsewhere"), 0)
-        labels = ", ".join(f"{lab} {k}" for (pn, lab), k in sorted(props.items(),
-                                                                    key=lambda t: -t[1])
+        on, off = where[name, True], where[name, False]
+        labels = ", ".join(f"{lab} {k}" for (pn, lab), k in props.most_common()
                            if pn == name) or "-"
         lines.append(f"| {name} | {n} | {(on + off) / n:.3f} | {on / n:.3f} | {off / n:.3f} "
                      f"| {labels} |")
-    on = sum(v for (_, w), v in where.items() if w != "elsewhere")
-    off = sum(v for (_, w), v in where.items() if w == "elsewhere")
+    on = sum(v for (_, lies_on), v in where.items() if lies_on)
+    off = sum(v for (_, lies_on), v in where.items() if not lies_on)
     lines.append(f"| both | {2 * n} | {(on + off) / (2 * n):.3f} | {on / (2 * n):.3f} | "
                  f"{off / (2 * n):.3f} | |")
     return "\n".join(lines)

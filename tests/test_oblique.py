@@ -18,6 +18,8 @@ from seahough.motion import pair as PAIR
 from seahough.motion import perspective as PP
 from seahough.motion import pyramid as PY
 
+from conftest import write_frames
+
 
 def _seq(**kw):
     args = dict(n_frames=3, frame_size=(120, 160), seed=2, source="procedural", water=None,
@@ -595,11 +597,7 @@ def test_a_keyframe_look_alike_gives_way_to_the_adjacent_frame(tmp_path):
     assert [r["ref"] for r in rows[2:]] == [1, 2, 3]
     # the check depends on the last row's search: a run resumed after frame 2
     # (its state rebuilt from the CSV's rows) goes on as the uninterrupted one
-    paths = []
-    for k, f in enumerate(frames):
-        paths.append(str(tmp_path / "frames" / f"f{k}.png"))
-        (tmp_path / "frames").mkdir(exist_ok=True)
-        cv2.imwrite(paths[-1], f)
+    paths = write_frames(frames, tmp_path / "frames")
     whole = seahough.run_odometry(paths, tmp_path / "whole", mosaic=False, progress=False,
                                   workers=1)
     seahough.run_odometry(paths[:3], tmp_path / "cut", mosaic=False, progress=False, workers=1)
