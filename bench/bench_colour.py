@@ -21,16 +21,19 @@ the wreck, the second Skerki and DTU frames and the DTU starfish photo
 (seeds from 100000). Targets are judged on the test part.
 
 Variants, each with its own Detector (``scale_range (0.5, 2)``, any angle,
-default thresholds): grey = ``Config()``, colour = ``Config(colour=True)``
-(when this seahough has it; the script says which ran). The pattern is the
+default thresholds): grey = ``Config(colour=False)``, colour =
+``Config(colour=True)`` (when this seahough has it; the script says which
+ran). The defaults (``Config()``: colour for a painted pattern) search these
+patterns in colour; the page says so when they do. The pattern is the
 marker as designed, in its nominal paint, on a dark canvas
 (``Pattern.from_image(image, mask, polarity="either")``: whether a painted
 marker looks lighter or darker than the seabed depends on the seabed and the
 water). Success: the best answer within 3 px of the marker's centre, scale
 within 5 %, angle within 3 degrees (the rectangle: modulo 180). A false alarm:
 an answer more than half the marker's size from it. Also: the same scenes
-made grey (``cv2.COLOR_BGR2GRAY``) searched with ``Config()`` and with
-``Config(colour=True)``, pattern made grey too: the answers must be the same.
+made grey (``cv2.COLOR_BGR2GRAY``) searched with ``Config(colour=False)``
+and with ``Config(colour=True)``, pattern made grey too: the answers must be
+the same.
 
 Times: one search, single thread (``NUMBA_NUM_THREADS=1``, bench/_common.py),
 after a warm-up search per detector (Numba compile time excluded).
@@ -84,7 +87,33 @@ CHAIN = None
 
 
 def grey_config():
-    return seahough.Config() if CHAIN is None else seahough.Config(chain_length=CHAIN)
+    """``Config(colour=False)``: grey edges (``Config()`` takes a painted
+    pattern's colour edges)."""
+    try:
+        return (seahough.Config(colour=False) if CHAIN is None
+                else seahough.Config(colour=False, chain_length=CHAIN))
+    except (TypeError, seahough.SeahoughError):
+        return seahough.Config()
+
+
+def defaults_in_colour() -> str:
+    """What the defaults do with these patterns: whether ``Config()``
+    searches every marker pattern of every paint in colour, a sentence."""
+    colours = set()
+    for name in S.MARKERS:
+        for paint in PAINT_NAMES:
+            img, mask = S.marker(name, SIZE, colour=S.PAINTS[paint])
+            pat = seahough.Pattern.from_image(img, mask=mask, polarity="either")
+            colours.add(bool(seahough.Detector(pat, (0.5, 2.0)).config.colour))
+    if colours == {True}:
+        return ("**At the defaults** (`Config()`, whose `colour` is None: in colour for a "
+                "painted pattern, `Pattern.painted`), every marker pattern here, in every paint, "
+                "is searched in colour: the colour row is what a user gets without asking.")
+    if colours == {False}:
+        return ("**At the defaults** (`Config()`) every marker pattern here is searched in grey: "
+                "the grey row is what a user gets without asking.")
+    return ("**At the defaults** (`Config()`) some marker patterns here are searched in colour, "
+            "others in grey.")
 
 
 def colour_config():
@@ -428,7 +457,7 @@ def report(parts: dict, args, elapsed: float, allocator: str, ran: list[str]) ->
         f"{len({r['photo'] for r in test})} test photos. Success: within {POS_TOL:g} px, "
         f"scale within {100 * SCALE_TOL:g} %, angle within {ANGLE_TOL:g} degrees. "
         "FA: answers more than half the marker's size away from it, per search.", "",
-        headline(test), "",
+        headline(test), "", defaults_in_colour(), "",
         "## By marker kind and water (test part)", "", by_marker_water(test), "",
         "## By distance (test part)", "", by_group(test, "distance", DISTANCES, lambda d: f"{d:g} m"),
         "",
@@ -538,7 +567,8 @@ def main(argv=None) -> str:
         args.n = 1
     allocator = steady_allocator()
     cfg = colour_config()
-    ran = ["grey (Config())"] + (["colour (Config(colour=True))"] if cfg is not None else [])
+    ran = ["grey (Config(colour=False))"] + (["colour (Config(colour=True))"] if cfg is not None
+                                             else [])
     log("variants: " + ", ".join(ran)
         + ("" if cfg is not None else "; Config(colour=True) is not available: colour skipped"))
     tune_photos, test_photos = split_photos()

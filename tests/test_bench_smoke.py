@@ -303,6 +303,8 @@ def test_colour_benchmark_quick(tmp_path):
     text = _quick_page(ROOT / "bench" / "bench_colour.py", out)
     assert "Machine:" in text and "Command:" in text and "Date:" in text
     has_colour = "colour (Config(colour=True))" in text.split("Variants that ran:", 1)[1]
+    if has_colour:   # (what the defaults do with the painted markers, said on the page)
+        assert "every marker pattern here, in every paint, is searched in colour" in text
     head = _rows(_section(text, "## Headline (test part)"))
     assert [r[0] for r in head[1:]] == (["grey", "colour"] if has_colour else ["grey"])
     for r in head[1:]:

@@ -606,3 +606,27 @@ def test_demo_end_to_end(tmp_path):
         assert im.std() > 5, f"{name} is (almost) blank"
     assert "marker position" in proc.stdout and "rope offset" in proc.stdout
     assert "drift" in proc.stdout
+
+
+def test_detect_searches_a_painted_pattern_in_colour_unless_told_grey(tmp_path):
+    """An orange board on sand of the same grey level: its pattern image is
+    painted, so `seahough detect` finds it by its colour edges without
+    --colour; --grey searches grey levels, where the board has no edge."""
+    sand, orange = (90, 140, 120), (40, 93, 230)          # BGR, both grey 128
+    pat = np.empty((80, 110, 3), np.uint8)
+    pat[:] = sand
+    pat[20:60, 25:85] = orange
+    scene = np.empty((360, 480, 3), np.uint8)
+    scene[:] = sand
+    box = cv2.boxPoints(((250.0, 170.0), (120.0, 80.0), 20.0))    # the board at 2x, turned
+    cv2.fillPoly(scene, [np.round(box).astype(np.int32)], orange)
+    cv2.imwrite(str(tmp_path / "board.png"), pat)
+    cv2.imwrite(str(tmp_path / "scene.png"), scene)
+    args = ("detect", tmp_path / "board.png", tmp_path / "scene.png", "--json",
+            "--scale-range", 1.5, 2.5)
+    rec = json.loads(run(*args).stdout)
+    assert rec["found"] is True
+    best = rec["detections"][0]
+    assert np.hypot(best["x"] - 250.0, best["y"] - 170.0) < 2.0 and abs(best["scale"] - 2) < 0.05
+    grey = run(*args, "--grey")        # (in grey levels the pattern has no edge at all)
+    assert grey.returncode == 2 and "too few edges" in grey.stderr, grey.stderr

@@ -23,10 +23,11 @@ def test_bad_odometry_tuning_names_the_field(field, value):
         OdometryTuning(**{field: value})
 
 
-@pytest.mark.parametrize("value", ["x", 1, None, "True"])
-def test_config_colour_is_true_or_false(value):
-    assert seahough.Config().colour is False                  # grey edges unless asked
+@pytest.mark.parametrize("value", ["x", 1, "True", "auto"])
+def test_config_colour_is_true_false_or_none(value):
+    assert seahough.Config().colour is None       # colour for a painted pattern, else grey
     assert seahough.Config(colour=True).colour is True
+    assert seahough.Config(colour=False).colour is False
     with pytest.raises(seahough.ParameterError, match=r"Config\.colour=.*True or False"):
         seahough.Config(colour=value)
 

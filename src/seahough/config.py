@@ -162,7 +162,7 @@ class Config:
     equalize : bool
         Apply CLAHE (local contrast equalisation) before the gradients; helps
         with uneven strobe light and haze (a colour image: each channel).
-    colour : bool
+    colour : bool or None
         Edges from every channel of a colour (BGR or BGRA) image and pattern:
         the Di Zenzo colour gradient (the largest eigenvalue of the channels'
         structure tensor and its direction, ``docs/method.md``, "Colour
@@ -171,6 +171,11 @@ class Config:
         water has taken the red) still has a border. Grey images, and colour
         ones whose channels are all equal, are searched as before (the same
         results, bit for bit). Camera frames in dead reckoning stay grey.
+        None (the default): in colour when the pattern is painted in colour
+        (:attr:`Pattern.painted <seahough.Pattern.painted>`: an orange or a
+        green marker; not a grey pattern, a shape or a crop of a seabed
+        photo), in grey otherwise (:meth:`seahough.Pattern.in_colour`); a
+        Detector of several patterns decides for each.
     colour_boost : float
         With ``colour``: the searched image's channels are weighed by its
         own gradient statistics (:func:`seahough.core.preprocess.colour_metric`):
@@ -251,7 +256,7 @@ class Config:
     local_window: int = 31
     chain_length: float = 8.0
     equalize: bool = False
-    colour: bool = False
+    colour: bool | None = None
     colour_boost: float = 4.0
     pattern_blur: float = 1.0
     segment_steps: int = 2
@@ -297,8 +302,11 @@ class Config:
         for name in ("segment_angle_tol", "angle_tolerance"):
             check(name, lo=0.0, lo_open=True, hi=90.0)
         for name in ("local_contrast", "equalize", "refine", "colour"):
-            if not isinstance(getattr(self, name), (bool, np.bool_)):
-                raise ParameterError(f"Config.{name}={getattr(self, name)!r}: must be True or False")
+            v = getattr(self, name)
+            if not isinstance(v, (bool, np.bool_)) and not (name == "colour" and v is None):
+                raise ParameterError(f"Config.{name}={v!r}: must be True or False"
+                                     + (" (or None: colour for a painted pattern)"
+                                        if name == "colour" else ""))
         if not isinstance(self.search, SearchTuning):
             raise ParameterError("Config.search must be a seahough.config.SearchTuning")
         if self.voting not in VOTING_MODES:

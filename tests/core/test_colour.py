@@ -65,7 +65,7 @@ def test_a_colour_pattern_image_needs_colour_edges(tmp_path):
     crop[:] = SAND
     crop[20:60, 25:85] = ORANGE
     with pytest.raises(PatternError, match="too few edges"):
-        Pattern.from_image(crop)                  # grey: no edges to find it by
+        Pattern.from_image(crop, config=Config(colour=False))   # grey: no edges to find it by
     p = Pattern.from_image(crop, config=COLOUR)
     assert p.image.shape == (80, 110)             # the pattern image stays grey
     found = Detector(p, (2.0, 4.0), config=COLOUR).detect(_scene())
@@ -160,8 +160,8 @@ def test_colour_gradients_point_one_way_along_a_whole_border():
     assert grey.magnitude[on].max() < 0.1 * g.magnitude[on].min()
 
 
-def test_config_colour_must_be_a_bool():
-    assert Config().colour is False and COLOUR.colour is True
+def test_config_colour_must_be_a_bool_or_none():
+    assert Config().colour is None and COLOUR.colour is True
     with pytest.raises(ParameterError, match=r"Config\.colour='x'"):
         Config(colour="x")
     with pytest.raises(ParameterError, match=r"Config\.colour"):
@@ -225,3 +225,47 @@ def test_weighing_the_colours_finds_a_colour_border_in_grey_texture():
 def test_config_colour_boost_is_checked(bad):
     with pytest.raises(ParameterError, match="colour_boost"):
         Config(colour=True, colour_boost=bad)
+
+
+def test_a_painted_pattern_is_searched_in_colour_by_default():
+    """Config.colour None (the default): a pattern painted in colour (an
+    orange board on sand) is searched by its colour edges, and finds the
+    iso-luminant board that a grey search cannot see; a grey pattern, a
+    shape, and a crop of a dull seabed photo stay grey."""
+    crop = np.empty((80, 110, 3), np.uint8)
+    crop[:] = SAND
+    crop[20:60, 25:85] = ORANGE
+    p = Pattern.from_image(crop)                  # (painted: no Config needed for its edges)
+    assert p.painted and p.in_colour() and not p.in_colour(Config(colour=False))
+    det = Detector(p, (2.0, 4.0))
+    assert det.config.colour is True
+    found = det.detect(_scene())
+    assert found and _at_truth(found[0]), [_pose(d) for d in found]
+    # a grey board, a shape, a dull seabed crop: grey searches
+    board = np.full((80, 110), 60, np.uint8)
+    board[20:60, 25:85] = 200
+    grey = Pattern.from_image(cv2.cvtColor(board, cv2.COLOR_GRAY2BGR))   # (three equal channels)
+    rng = np.random.default_rng(0)
+    seabed = np.clip(rng.normal(0, 12, (64, 64, 1)) + (95, 110, 105), 0, 255).astype(np.uint8)
+    seabed = cv2.GaussianBlur(seabed, (0, 0), 1.5)
+    for q in (grey, Pattern.rectangle(60, 40), Pattern.from_image(seabed)):
+        assert not q.painted and Detector(q).config.colour is False
+    assert Detector(Pattern.rectangle(60, 40), (2.0, 4.0)).detect(_scene()) == []
+
+
+def test_each_pattern_of_a_detector_gets_its_own_edges():
+    """A Detector of a painted pattern and a grey shape: each pattern is
+    searched in the image it needs (the painted one in colour, the shape in
+    grey), and finds what it finds searched alone."""
+    crop = np.empty((80, 110, 3), np.uint8)
+    crop[:] = SAND
+    crop[20:60, 25:85] = ORANGE
+    pats = {"board": Pattern.from_image(crop), "rect": Pattern.rectangle(60, 40)}
+    img = _scene()
+    many = Detector(pats, (2.0, 4.0))
+    assert {k: d.config.colour for k, d in many.parts.items()} == {"board": True, "rect": False}
+    got = many.detect(img)
+    alone = [d for k, p in pats.items() for d in Detector(p, (2.0, 4.0)).detect(img)]
+    key = lambda d: (round(d.x, 6), round(d.y, 6), round(d.scale, 6), round(d.score, 6))  # noqa: E731
+    assert sorted(map(key, got)) == sorted(map(key, alone))
+    assert {d.pattern for d in got} == {"board"}

@@ -118,7 +118,7 @@ def _side_counts(x, y, half_w, half_h):
             int((y < 1 - half_h).sum()), int((y > half_h - 1).sum())]
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason="pattern._spread: when the pattern has fewer than about "
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason="keypoints.spread_points: when the pattern has fewer than about "
                    "twice as many edge points as it keeps, no spacing over 1 px leaves enough, and "
                    "the greedy pass (strongest first, stopping at the count) keeps the strongest: "
                    "the fainter bottom side of Pattern.rectangle(120, 80) gets none of its 256 "

@@ -213,9 +213,11 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, max_width=No
 @click.option("--keypoints", type=click.IntRange(min=1), default=None,
               help=f"Number of most contrasted edge points kept (default {_CFG.n_keypoints}).")
 @click.option("--equalize", is_flag=True, help="Local contrast equalisation (haze, uneven light).")
-@click.option("--colour/--grey", "colour", default=_CFG.colour, show_default=True,
+@click.option("--colour/--grey", "colour", default=None,
               help="Edges from every colour channel of a colour image (an object that differs "
-                   "from its ground by hue more than by brightness), or from its grey levels.")
+                   "from its ground by hue more than by brightness), or from its grey levels "
+                   "(default: colour when the pattern image is painted in colour, an orange or "
+                   "a green marker; grey otherwise).")
 @click.option("--polarity", type=click.Choice(["same", "inverted", "either", "bright", "dark"]),
               default=None, help="Contrast of the object: as in the pattern image (same; for "
               "shapes: bright on dark), inverted (dark), or either.")

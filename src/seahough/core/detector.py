@@ -139,6 +139,9 @@ class Detector:
         self.config = config or Config()
         if not isinstance(self.config, Config):
             raise ParameterError("config must be a seahough.Config")
+        if self.config.colour is None and not self.parts:
+            # (in colour when the pattern is painted: Config.colour's None)
+            self.config = self.config.replace(colour=pattern.in_colour(self.config))
         self.max_results = int(number("max_results", max_results, lo=1, integer=True))
         self.min_score = number("min_score", min_score, lo=0.0, hi=1.0)
         self.min_confidence = number("min_confidence", min_confidence, lo=0.0, hi=1.0)
@@ -156,9 +159,12 @@ class Detector:
         self._gaps: dict = {}   # working scale -> the pattern's edge gap (see _edge_gap)
         if self.parts:   # one Config for all: they share the image's features
             ref = self.config if config is not None else next(iter(self.parts.values())).config
-            if any(d.config != ref for d in self.parts.values()):
+            # (but for colour: each pattern is searched in the image it needs)
+            if any(d.config.replace(colour=None) != ref.replace(colour=None)
+                   for d in self.parts.values()):
                 raise ParameterError("config: the patterns of one Detector share the image's "
-                                     "features, so their Detectors must have the same Config")
+                                     "features, so their Detectors must have the same Config "
+                                     "(but for colour)")
             self.config = ref
 
     def detect(self, image) -> list:
@@ -177,9 +183,9 @@ class Detector:
         """
         cfg = self.config
         t0 = time.perf_counter()
-        gray = to_image(image, cfg.colour, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
         if self.parts:
-            return self._search_parts(gray, features, t0)
+            return self._search_parts(image, features, t0)
+        gray = to_image(image, cfg.colour, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
         return self._search_pattern(gray, features, t0)
 
     def _search_pattern(self, gray, features: Features | None, t0: float,
@@ -302,29 +308,35 @@ class Detector:
             return (a0, a0 + 180.0)
         return (a0, a1)
 
-    def _search_parts(self, gray, features: Features | None, t0: float) -> SearchResult:
+    def _search_parts(self, image, features: Features | None, t0: float) -> SearchResult:
         """Every pattern searched in one image. The image's features are
         computed once per working scale (patterns of similar size share
-        one), so each pattern finds what it would find searched alone."""
+        one) and per kind of edges (grey, colour: each pattern's own
+        ``Config.colour``), so each pattern finds what it would find
+        searched alone."""
         cfg = self.config
         parts = self.parts
+        images = {c: to_image(image, c, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
+                  for c in sorted({bool(d.config.colour) for d in parts.values()})}
         shared = {}
         keys = {}
         for name, d in parts.items():
+            gray = images[bool(d.config.colour)]
             if features is not None:
                 keys[name] = None
                 shared[None] = features
                 continue
             fcfg = d._features_config()
             f = choose_factor(gray.shape, cfg, d.pattern.extent, d.scale_range[0])
-            key = (f, d._n_keypoints(gray.shape, f), fcfg.chain_length)
+            key = (f, d._n_keypoints(gray.shape, f), fcfg.chain_length, bool(d.config.colour))
             keys[name] = key
             if key not in shared:
                 shared[key] = extract_features(gray, key[0], fcfg, n_keypoints=key[1],
                                                weigh_colours=True)
         t1 = time.perf_counter()
-        results = {name: d._search_pattern(gray, shared[keys[name]], time.perf_counter(), name,
-                                              None if keys[name] is None else keys[name][0])
+        results = {name: d._search_pattern(images[bool(d.config.colour)], shared[keys[name]],
+                                           time.perf_counter(), name,
+                                           None if keys[name] is None else keys[name][0])
                    for name, d in parts.items()}
         timings = {"features": t1 - t0}
         for r in results.values():

@@ -341,3 +341,31 @@ def select_keypoints(edges: EdgePoints, n: int, strength: np.ndarray | None = No
         keep = np.argpartition(-v[ids], n - 1)[:n]
         ids = np.sort(ids[keep])
     return ids
+
+
+def spread_points(x, y, order, count):
+    """The indices (sorted) of ``count`` of the edge points ``x, y`` spread
+    evenly over the edges, the strongest first (``order``: their indices,
+    strongest first); all of them when there are no more."""
+    n = x.shape[0]
+    if n <= count:
+        return np.asarray(order, np.int64)
+    x = np.ascontiguousarray(x, np.float64)
+    y = np.ascontiguousarray(y, np.float64)
+    # the spacing that leaves about `count` points: edges are lines, so about
+    # n / count pixels; bisect within a bracket around that
+    guess = n / count
+    lo, hi = 0.25 * guess, 2.0 * guess
+    best = None
+    for _ in range(7):  # bisection on the spacing
+        d = 0.5 * (lo + hi)
+        # (the greedy pass stops at `count`: the same first points, found sooner)
+        kept = K.spread_points(x, y, order, d, count)
+        if kept.size >= count:
+            best, lo = kept, d
+        else:
+            hi = d
+    if best is None:
+        best = K.spread_points(x, y, order, lo, count)
+    return np.sort(best[:count])
+

@@ -22,7 +22,7 @@ from ..errors import ParameterError, PatternError
 from .features import extract_features
 from ..io.images import to_gray
 from . import pattern_io as _pio
-from .keypoints import chain_share, edge_points_near_image, find_edge_points
+from .keypoints import chain_share, edge_points_near_image, find_edge_points, spread_points
 from .preprocess import choose_factor, compute_gradients
 from . import shapes as _shapes
 
@@ -109,7 +109,15 @@ class Pattern:
     image : ndarray
         The pattern image (uint8 grey); :attr:`Detection.matrix` maps its
         pixels into the searched image. A colour pattern image also keeps
-        its colours, whose edges a search with ``Config(colour=True)`` uses.
+        its colours, whose edges a search in colour uses
+        (:meth:`in_colour`).
+    painted : bool
+        Whether the pattern is painted in colour: a colour image of which
+        a fifth of the pixels (of its mask's) at least are as saturated as
+        paint (:func:`seahough.core.pattern_io.painted`: an orange or a
+        green marker, not a crop of a seabed photo). A painted pattern is
+        searched by its colour edges unless ``Config.colour`` says
+        otherwise.
     mask : ndarray or None
         Which pattern pixels belong to the object.
     origin : tuple of float
@@ -162,6 +170,7 @@ class Pattern:
             if not mask.any():
                 raise PatternError("pattern mask is empty: no pixel belongs to the object")
         self.mask = mask
+        self.painted = _pio.painted(colour, mask)
         if origin is None:
             origin = ((w - 1) / 2.0, (h - 1) / 2.0)
         try:
@@ -210,7 +219,8 @@ class Pattern:
         ----------
         image : path or ndarray
             The object's picture; grey, BGR or BGRA (searched by its colour
-            edges with ``Config(colour=True)``, by its grey ones otherwise).
+            edges when :attr:`painted` or with ``Config(colour=True)``, by its
+            grey ones otherwise: :meth:`in_colour`).
         mask : path or ndarray, optional
             Non-zero on the object's pixels; edges outside it (dilated by two
             pixels, so the object's border counts) are ignored.
@@ -222,7 +232,7 @@ class Pattern:
         config : Config, optional
             The configuration it will be searched with: the pattern must have
             edges under it (an object told from its surroundings by colour
-            alone has edges only with ``Config(colour=True)``).
+            alone has edges only when searched in colour: :meth:`in_colour`).
         """
         if polarity not in _IMAGE_POLARITIES:
             raise ParameterError(f"polarity={polarity!r}: must be one of same, inverted, either")
@@ -353,7 +363,7 @@ class Pattern:
                 config.segment_angle_tol, config.max_segments, config.equalize,
                 config.local_contrast, config.local_window,
                 config.pattern_blur if self.is_photo else 0.0,
-                3 if config.colour and getattr(self, "_colour", None) is not None else 2)
+                3 if self.in_colour(config) else 2)
 
     def grey_levels(self) -> np.ndarray:
         """The grey levels the pattern's edges come from, as it holds them:
@@ -374,11 +384,29 @@ class Pattern:
         g = self.__dict__.get("_gray_f")
         return self.image.astype(np.float32) if g is None else g
 
+    def in_colour(self, config: Config | None = None) -> bool:
+        """Whether a search with ``config`` takes its edges from colours:
+        ``Config.colour`` when set, else (None, the default) when the
+        pattern is :attr:`painted`; never for a grey pattern.
+
+        >>> bgr = np.full((40, 60, 3), 30, np.uint8)
+        >>> bgr[10:30, 15:45] = (0, 120, 255)                  # an orange board
+        >>> p = Pattern.from_image(bgr)
+        >>> p.painted, p.in_colour(), p.in_colour(Config(colour=False))
+        (True, True, False)
+        >>> Pattern.rectangle(60, 40).in_colour(Config(colour=True))   # no colour in it
+        False
+        """
+        if getattr(self, "_colour", None) is None:
+            return False
+        colour = (config or Config()).colour
+        return bool(self.painted if colour is None else colour)
+
     def _edges_from(self, config: Config) -> np.ndarray:
         """The image whose edges are the pattern's: its colours with
         ``config.colour`` (when it has any), else its grey levels."""
         colour = getattr(self, "_colour", None)
-        return colour if config.colour and colour is not None else self._gray
+        return colour if colour is not None and self.in_colour(config) else self._gray
 
     def has_long_borders(self, config: Config | None = None) -> bool:
         """Do the pattern's edges lie on long chains (a shape, a marker) rather
@@ -395,7 +423,7 @@ class Pattern:
         config = config or Config()
         if not self.is_photo:
             return not self.is_frame
-        key = ("long borders", config.chain_length, config.min_gradient, config.colour)
+        key = ("long borders", config.chain_length, config.min_gradient, self.in_colour(config))
         if key not in self._cache:
             img = np.ascontiguousarray(self._edges_from(config), np.float32)
             if config.pattern_blur > 0:   # (as its features see it: a crisp staircase is not)
@@ -529,8 +557,8 @@ class Pattern:
         x, y = to_rel(fx_, fy_)
         x2, y2 = to_rel(*g.to_full(seg.x2, seg.y2))
         order = np.argsort(-seg.magnitude, kind="stable")
-        vote_ids = _spread(x, y, order, config.n_pattern_points)
-        verify_ids = _spread(x, y, order, config.n_verify_points)
+        vote_ids = spread_points(x, y, order, config.n_pattern_points)
+        verify_ids = spread_points(x, y, order, config.n_verify_points)
         w = np.full(vote_ids.size, 1.0 / max(vote_ids.size, 1), np.float32)
         f32 = lambda a: np.ascontiguousarray(a, np.float32)
         return PatternFeatures(
@@ -570,27 +598,3 @@ class Pattern:
         h, w = self.image.shape
         return f"Pattern(kind={self.kind!r}, size={w}x{h}, origin={self.origin}, polarity={self.polarity!r})"
 
-
-def _spread(x, y, order, count):
-    """``count`` points spread evenly over the pattern's edges, strongest first."""
-    n = x.shape[0]
-    if n <= count:
-        return np.asarray(order, np.int64)
-    x = np.ascontiguousarray(x, np.float64)
-    y = np.ascontiguousarray(y, np.float64)
-    # the spacing that leaves about `count` points: edges are lines, so about
-    # n / count pixels; bisect within a bracket around that
-    guess = n / count
-    lo, hi = 0.25 * guess, 2.0 * guess
-    best = None
-    for _ in range(7):  # bisection on the spacing
-        d = 0.5 * (lo + hi)
-        # (the greedy pass stops at `count`: the same first points, found sooner)
-        kept = K.spread_points(x, y, order, d, count)
-        if kept.size >= count:
-            best, lo = kept, d
-        else:
-            hi = d
-    if best is None:
-        best = K.spread_points(x, y, order, lo, count)
-    return np.sort(best[:count])

@@ -104,3 +104,35 @@ def load(cls, path, config: Config | None = None):
             zlib.error, EOFError, OSError) as e:
         raise PatternError(f"{bad} ({e})") from None
     return p
+
+
+#: A pattern is painted (:attr:`Pattern.painted`), and searched by its colour
+#: edges when ``Config.colour`` is None (the default), when at least
+#: :data:`PAINTED_SHARE` of its pixels (its mask's, when it has one) have a
+#: chroma (the largest of their B, G, R levels less the smallest, 0-255) of at
+#: least this. Paints have 120-255 (the coloured markers of
+#: bench/bench_colour.py: green 120, red 170, yellow 205, orange 255).
+PAINTED_CHROMA = 80.0
+#: ... the share: in 1,374 random crops (64-256 px) of the shared real photos
+#: and sequences, at most 0.001 of a seabed crop's pixels reach that chroma,
+#: 0.11 of a tiled pool's; RoboSub's pool photos, whose water is as saturated
+#: as paint, are painted everywhere (a crop of them is searched in colour).
+PAINTED_SHARE = 0.2
+
+
+def painted(colour, mask) -> bool:
+    """Whether a pattern's BGR levels (None: a grey pattern) are painted: at
+    least :data:`PAINTED_SHARE` of them (of those in ``mask``, boolean; None:
+    every pixel) have a chroma of at least :data:`PAINTED_CHROMA`.
+
+    >>> bgr = np.full((40, 60, 3), 30, np.float32)
+    >>> bgr[10:30, 15:45] = (0, 120, 255)           # an orange board on a dark ground
+    >>> painted(bgr, None), painted(bgr[:, :12], None), painted(None, None)
+    (True, False, False)
+    """
+    if colour is None:
+        return False
+    chroma = colour.max(axis=2) - colour.min(axis=2)
+    if mask is not None:
+        chroma = chroma[mask]
+    return bool((chroma >= PAINTED_CHROMA).mean() >= PAINTED_SHARE)

@@ -142,8 +142,8 @@ def _prepare(detector: Detector, path: str) -> None:
             w, h = im.size
     except Exception:           # unreadable: its row will say why
         return
-    cfg = detector.config
     for d in (detector.parts or {"": detector}).values():
+        cfg = d.config    # (each pattern's: its colour is its own)
         factor = choose_factor((h, w), cfg, d.pattern.extent, d.scale_range[0])
         d.pattern.features(factor, cfg)
         d.pattern.finish_points(factor, cfg)
