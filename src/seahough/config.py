@@ -174,8 +174,10 @@ class Config:
         None (the default): in colour when the pattern is painted in colour
         (:attr:`Pattern.painted <seahough.Pattern.painted>`: an orange or a
         green marker; not a grey pattern, a shape or a crop of a seabed
-        photo), in grey otherwise (:meth:`seahough.Pattern.in_colour`); a
-        Detector of several patterns decides for each.
+        photo), then at either polarity (a colour edge's sign depends on
+        the ground) and, in a grey image, by the pattern's grey edges; in
+        grey otherwise (:meth:`seahough.Pattern.in_colour`). A Detector of
+        several patterns decides for each.
     colour_boost : float
         With ``colour``: the searched image's channels are weighed by its
         own gradient statistics (:func:`seahough.core.preprocess.colour_metric`):

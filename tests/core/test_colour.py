@@ -255,17 +255,69 @@ def test_a_painted_pattern_is_searched_in_colour_by_default():
 
 def test_each_pattern_of_a_detector_gets_its_own_edges():
     """A Detector of a painted pattern and a grey shape: each pattern is
-    searched in the image it needs (the painted one in colour, the shape in
-    grey), and finds what it finds searched alone."""
+    searched in the image it needs (the painted board in colour, the shape
+    in grey), and finds what it finds searched alone: the iso-luminant board
+    and a white rectangle elsewhere in the scene."""
     crop = np.empty((80, 110, 3), np.uint8)
     crop[:] = SAND
     crop[20:60, 25:85] = ORANGE
     pats = {"board": Pattern.from_image(crop), "rect": Pattern.rectangle(60, 40)}
-    img = _scene()
-    many = Detector(pats, (2.0, 4.0))
+    img = _scene(noise=0)
+    box = cv2.boxPoints(((120.0, 400.0), (120.0, 80.0), 0.0))       # the rectangle at 2x
+    cv2.fillPoly(img, [np.round(box).astype(np.int32)], (235, 235, 235))
+    many = Detector(pats, (1.5, 4.0))
     assert {k: d.config.colour for k, d in many.parts.items()} == {"board": True, "rect": False}
+    assert many.config.colour is None               # (its patterns differ)
     got = many.detect(img)
-    alone = [d for k, p in pats.items() for d in Detector(p, (2.0, 4.0)).detect(img)]
+    alone = {k: Detector(p, (1.5, 4.0)).detect(img) for k, p in pats.items()}
     key = lambda d: (round(d.x, 6), round(d.y, 6), round(d.scale, 6), round(d.score, 6))  # noqa: E731
-    assert sorted(map(key, got)) == sorted(map(key, alone))
-    assert {d.pattern for d in got} == {"board"}
+    assert sorted(key(d) for d in got) == sorted(key(d) for v in alone.values() for d in v)
+    assert any(_at_truth(d) for d in alone["board"]), [_pose(d) for d in alone["board"]]
+    r = alone["rect"][0]
+    assert math.hypot(r.x - 120, r.y - 400) < 2 and abs(r.scale - 2) < 0.05, _pose(r)
+    # one set of features cannot serve a grey and a colour search
+    with pytest.raises(ParameterError, match="features"):
+        many.search(img, features=many.search(img).features)
+    # shapes alone: the Detector's config is grey, as before Config.colour's None
+    assert Detector({"a": Pattern.rectangle(60, 40), "b": Pattern.circle(20)}).config.colour is False
+
+
+def test_a_painted_pattern_in_a_grey_image_is_searched_by_its_grey_edges():
+    """A grey image has no colour to see: a painted pattern (an orange board
+    on a dark canvas) is then searched by its grey edges, exactly as with
+    ``Config(colour=False)``. In a colour image it is searched by its colour
+    edges, either polarity: the board is orange on grey in the pattern image
+    (red rises most across its border) and orange on blue in the scene (blue
+    falls most), so a colour edge's sign says nothing of the object."""
+    orange = (0, 120, 255)                                           # grey 147
+    pat = np.full((80, 110, 3), 30, np.uint8)
+    pat[20:60, 25:85] = orange
+    scene = np.full((480, 640, 3), (200, 150, 60), np.uint8)         # a blue ground, grey 129
+    box = cv2.boxPoints(((380.0, 220.0), (180.0, 120.0), -30.0))
+    cv2.fillPoly(scene, [np.round(box).astype(np.int32)], orange)
+    grey = cv2.cvtColor(scene, cv2.COLOR_BGR2GRAY)
+    p = Pattern.from_image(pat)                                      # (polarity: as painted)
+    auto = Detector(p, (2.0, 4.0)).detect(grey)
+    plain = Detector(p, (2.0, 4.0), config=Config(colour=False)).detect(grey)
+    assert auto and _at_truth(auto[0]), [_pose(d) for d in auto]
+    assert [(_pose(d), d.score, d.nfa) for d in auto] == [(_pose(d), d.score, d.nfa) for d in plain]
+    det = Detector(p, (2.0, 4.0))
+    assert det.pattern.polarity == "either" and p.polarity == "bright"   # (the user's kept)
+    found = det.detect(scene)
+    assert found and _at_truth(found[0]), [_pose(d) for d in found]
+    assert Detector(p, (2.0, 4.0), config=COLOUR).detect(scene) == []    # (the sign asked for)
+
+
+def test_painted_takes_the_mask_and_its_thresholds():
+    from seahough.core.pattern_io import PAINTED_CHROMA, PAINTED_SHARE, painted
+    img = np.full((10, 10, 3), 100.0, np.float32)
+    n = int(round(PAINTED_SHARE * 100))
+    flat = img.reshape(-1, 3)
+    flat[:n] = (100.0, 100.0, 100.0 + PAINTED_CHROMA)              # a fifth just saturated enough
+    assert painted(img, None)
+    flat[0, 2] -= 1.0                                                 # one pixel fewer
+    assert not painted(img, None)
+    mask = np.zeros((10, 10), bool)
+    mask.reshape(-1)[:n] = True                                       # the mask on the paint
+    assert painted(img, mask) is True
+    assert painted(img, ~mask) is False                               # ... and on the ground

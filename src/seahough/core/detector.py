@@ -9,7 +9,9 @@ Detector, so one Detector can be shared by threads.
 
 from __future__ import annotations
 
+import copy
 import math
+import os
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -17,7 +19,7 @@ from dataclasses import dataclass, field
 from ..config import Config
 from .._validate import check_max_nfa, number
 from ..errors import ParameterError
-from ..io.images import to_image
+from ..io.images import read_image, to_image
 from .accumulator import (AccumulatorPlanes, accumulate, check_ranges, edge_gap, make_bins,
                           planes)
 from .candidates import PoseComparison, SearchContext, find_candidates
@@ -139,8 +141,14 @@ class Detector:
         self.config = config or Config()
         if not isinstance(self.config, Config):
             raise ParameterError("config must be a seahough.Config")
-        if self.config.colour is None and not self.parts:
-            # (in colour when the pattern is painted: Config.colour's None)
+        # Config.colour None: in colour when the pattern is painted, either
+        # polarity (a colour edge's sign is that of the channel that changes
+        # most across it, which depends on the ground, and the pattern image
+        # shows one); a grey image (no colour to see) is then searched by the
+        # pattern's grey edges, with its own polarity (self._grey)
+        self._grey = None
+        auto = self.config.colour is None and not self.parts
+        if auto:
             self.config = self.config.replace(colour=pattern.in_colour(self.config))
         self.max_results = int(number("max_results", max_results, lo=1, integer=True))
         self.min_score = number("min_score", min_score, lo=0.0, hi=1.0)
@@ -157,6 +165,13 @@ class Detector:
             search_region = sr
         self.search_region = search_region
         self._gaps: dict = {}   # working scale -> the pattern's edge gap (see _edge_gap)
+        if auto and self.config.colour:
+            self._grey = copy.copy(self)
+            self._grey.config = self.config.replace(colour=False)
+            self._grey._gaps = {}
+            if pattern.polarity != "either":
+                self.pattern = copy.copy(pattern)
+                self.pattern.polarity, self.pattern._cache = "either", {}
         if self.parts:   # one Config for all: they share the image's features
             ref = self.config if config is not None else next(iter(self.parts.values())).config
             # (but for colour: each pattern is searched in the image it needs)
@@ -165,7 +180,8 @@ class Detector:
                 raise ParameterError("config: the patterns of one Detector share the image's "
                                      "features, so their Detectors must have the same Config "
                                      "(but for colour)")
-            self.config = ref
+            colours = {d.config.colour for d in self.parts.values()}
+            self.config = ref.replace(colour=colours.pop() if len(colours) == 1 else None)
 
     def detect(self, image) -> list:
         """Detections of the pattern in ``image`` (path or array), best first.
@@ -186,7 +202,8 @@ class Detector:
         if self.parts:
             return self._search_parts(image, features, t0)
         gray = to_image(image, cfg.colour, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
-        return self._search_pattern(gray, features, t0)
+        det = self._grey if self._grey is not None and gray.ndim == 2 else self
+        return det._search_pattern(gray, features, t0)
 
     def _search_pattern(self, gray, features: Features | None, t0: float,
                         name: str = "", factor: float | None = None) -> SearchResult:
@@ -316,28 +333,40 @@ class Detector:
         searched alone."""
         cfg = self.config
         parts = self.parts
-        images = {c: to_image(image, c, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
-                  for c in sorted({bool(d.config.colour) for d in parts.values()})}
+        kinds = sorted({bool(d.config.colour) for d in parts.values()})
+        label = "image"
+        if len(kinds) > 1 and isinstance(image, (str, os.PathLike)):   # (decoded once)
+            label = str(image)
+            image = read_image(image, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
+        images = {c: to_image(image, c, name=label, max_pixels=cfg.max_pixels,
+                              max_memory_mb=cfg.max_memory_mb) for c in kinds}
+        # each pattern, and the image it is searched in (a grey image has no colour
+        # to see: a painted pattern's grey edges then, as searched alone)
+        work = {}
+        for name, d in parts.items():
+            img = images[bool(d.config.colour)]
+            work[name] = (d._grey if d._grey is not None and img.ndim == 2 else d, img)
+        if features is not None and len({img.ndim for _, img in work.values()}) > 1:
+            raise ParameterError("features: this Detector's patterns are searched in a grey and "
+                                 "a colour image, so one set of features cannot serve them all")
         shared = {}
         keys = {}
-        for name, d in parts.items():
-            gray = images[bool(d.config.colour)]
+        for name, (d, gray) in work.items():
             if features is not None:
                 keys[name] = None
                 shared[None] = features
                 continue
             fcfg = d._features_config()
             f = choose_factor(gray.shape, cfg, d.pattern.extent, d.scale_range[0])
-            key = (f, d._n_keypoints(gray.shape, f), fcfg.chain_length, bool(d.config.colour))
+            key = (f, d._n_keypoints(gray.shape, f), fcfg.chain_length, gray.ndim)
             keys[name] = key
             if key not in shared:
                 shared[key] = extract_features(gray, key[0], fcfg, n_keypoints=key[1],
                                                weigh_colours=True)
         t1 = time.perf_counter()
-        results = {name: d._search_pattern(images[bool(d.config.colour)], shared[keys[name]],
-                                           time.perf_counter(), name,
+        results = {name: d._search_pattern(gray, shared[keys[name]], time.perf_counter(), name,
                                            None if keys[name] is None else keys[name][0])
-                   for name, d in parts.items()}
+                   for name, (d, gray) in work.items()}
         timings = {"features": t1 - t0}
         for r in results.values():
             for k, v in r.timings.items():
