@@ -99,13 +99,14 @@ BEFORE = "seahough, similarity only"
 def _similarity_only(a, b):
     """seahough as it was before the homography checks (motion/perspective.py,
     motion/pyramid.py): both switched off, for the comparison in the same run."""
-    real = P.check_perspective, P.coarse_to_fine, P.MARGINAL
+    real = P.check_perspective, P.coarse_to_fine, P.MARGINAL, P.REPEATED
     P.check_perspective = P.coarse_to_fine = lambda *args, **kw: None
-    P.MARGINAL = 0.0     # (nor a marginal answer voted again at the coarse scale)
+    P.MARGINAL = 0.0     # (nor a marginal answer voted again at the coarse scale,
+    P.REPEATED = math.inf  # nor one over a repeated texture)
     try:
         return R.METHOD_FNS["seahough"](a, b)
     finally:
-        P.check_perspective, P.coarse_to_fine, P.MARGINAL = real
+        P.check_perspective, P.coarse_to_fine, P.MARGINAL, P.REPEATED = real
 
 
 METHOD_FNS = {**R.METHOD_FNS, BEFORE: _similarity_only}

@@ -18,7 +18,7 @@ from seahough.motion import pair as PAIR
 from seahough.motion import perspective as PP
 from seahough.motion import pyramid as PY
 
-from conftest import write_frames
+from conftest import data_path, write_frames
 
 
 def _seq(**kw):
@@ -507,9 +507,42 @@ def test_an_answer_the_vote_prefers_under_0_4_is_voted_again_coarsely(monkeypatc
     m = seahough.estimate_motion(frames[0], frames[2])
     assert m is not None and _corner_error(m.matrix, want, frames[0].shape) < 0.01 * diag
     monkeypatch.setattr(PAIR, "MARGINAL", 0.3)     # (as before 2026-12-06)
+    # a floor of tiles: the vote's runner-up scores over REPEATED of its best,
+    # so its answer is voted again at the coarse scale all the same
+    m = seahough.estimate_motion(frames[0], frames[2])
+    assert m is not None and _corner_error(m.matrix, want, frames[0].shape) < 0.01 * diag
+    monkeypatch.setattr(PAIR, "REPEATED", math.inf)  # (and as before the repeated texture's)
     m = seahough.estimate_motion(frames[0], frames[2])
     assert m is not None and 0.3 < m.confidence < 0.4
     assert _corner_error(m.matrix, want, frames[0].shape) > 0.1 * diag
+
+
+@pytest.mark.parametrize("i", [0, 9])
+def test_a_confident_look_alike_of_small_tiles_gives_way_to_the_coarse_vote(monkeypatch, i):
+    # the real tiled pool's small mosaic tiles (a forward-oblique camera), frames
+    # i -> i + 1: the vote is confident (0.70-0.73) in a look-alike 1.6-1.8 % of
+    # the diagonal off; its runner-up scores 0.30-0.40 of it (pair.REPEATED: a
+    # repeated texture), the coarse vote lies 1.6-2.1 coarse px away
+    # (pair.SHIFTED), and as homographies the true motion explains more of the
+    # frame. Reference: the similarity that fits SIFT+RANSAC's homography over
+    # the frame (as the answer is defined)
+    files = sorted(p for p in data_path("sequences", "subvo_pool_chain").iterdir()
+                   if p.suffix == ".jpg")
+    a, b = (cv2.imread(str(f), cv2.IMREAD_GRAYSCALE) for f in files[i:i + 2])
+    sift = cv2.SIFT_create(contrastThreshold=0.01)
+    (ka, da), (kb, db) = sift.detectAndCompute(a, None), sift.detectAndCompute(b, None)
+    good = [p for p, q in cv2.BFMatcher().knnMatch(da, db, k=2) if p.distance < 0.75 * q.distance]
+    H, _ = cv2.findHomography(np.float32([ka[m.queryIdx].pt for m in good]),
+                              np.float32([kb[m.trainIdx].pt for m in good]), cv2.RANSAC, 3.0)
+    want = PP.similarity_of(H, a.shape)[0]
+    d = math.hypot(*a.shape)
+    m = seahough.estimate_motion(a, b)
+    assert m is not None and _corner_error(m.matrix, want, a.shape) < 0.006 * d
+    assert m.homography is not None                      # (refitted, and judged, as one)
+    monkeypatch.setattr(PAIR, "REPEATED", math.inf)      # (before 2026-12-06)
+    m = seahough.estimate_motion(a, b)
+    assert m is not None and m.confidence > 0.6
+    assert _corner_error(m.matrix, want, a.shape) > 0.012 * d
 
 
 def test_one_answer_is_never_judged_against_itself(pool_pair):

@@ -803,21 +803,6 @@ def _step_disagreements(tmp_path, sequence, limit=10.0, config=None):
     return bad, compared
 
 
-def test_tile_look_alikes_are_flagged_not_measured(tmp_path):
-    # the tiled pool: a full search that lands on a tile-shifted look-alike of
-    # the keyframe (a 40 px jump where the pair itself says a few px) must be
-    # flagged as low confidence or corrected, not accepted (3 peaks per full
-    # search did; later, with 7, a doubtful keyframe look-alike three frames
-    # back at confidence 0.24 did, 52 px off, until such measurements were
-    # checked against the last measured frame: OdometryTuning.doubtful). 20 px, not
-    # 10: the adjacent frame's searches are measured as estimate_motion measures a
-    # pair (coarse to fine when the vote cannot vouch), and the similarity such a
-    # step reports for the pool's perspective change lies 11 px from the vote's
-    # there (frame 5); a tile look-alike is 37-40 px off
-    bad, compared = _step_disagreements(tmp_path, "subvo_pool_chain", limit=20.0)
-    assert bad == [] and compared >= 4, (bad, compared)   # (not vacuous: 4 of 11 pairs)
-
-
 def _sift_similarity(a, b):
     """SIFT + ratio test + RANSAC similarity from image file ``a`` to ``b``
     (an independent reference), and its number of inliers."""
@@ -832,20 +817,17 @@ def _sift_similarity(a, b):
     return m, int(inliers.sum())
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "issue 14, open: two pool steps on the prior against keyframe 4 are 50-60 px from "
-    "SIFT+RANSAC (3.3-4.0 % of the diagonal from bench_real_pairs.py's reference), under "
-    "NFA 1; checking every keyframe answer fixed them but quadrupled a downward survey's "
-    "prior pairs (docs/odometry.md)"))
 def test_every_pool_step_agrees_with_an_independent_feature_fit(tmp_path):
     # the tiled pool (a forward-oblique camera): no step may be a tile-shifted
-    # look-alike or a keyframe answer a few frames back that drifted off
-    # (2026-12-06: steps on the prior against a keyframe 2-3 frames back, 50-60
-    # px off SIFT; the test above, against estimate_motion, does not see them).
-    # Every measured step against SIFT+RANSAC on the same pair (600+ inliers on
-    # each): within 2.5 % of the diagonal (37 px). (Not against estimate_motion:
-    # on this pool its similarity vote is itself 27-30 px from SIFT on three
-    # pairs: the perspective change a similarity leaves out.)
+    # look-alike (37-40 px) or a keyframe answer a few frames back that drifted
+    # off. Every measured step against SIFT+RANSAC on the same pair (600+
+    # inliers on each): within 2 % of the diagonal (29 px). Until a confident
+    # vote over a repeated texture was checked at the coarse scale
+    # (pair.REPEATED, 2026-12-06), two steps on the prior against keyframe 4
+    # were 50-60 px off; now at most 27 px (steps 4 and 5, 23 and 27 px: the
+    # mosaic's small tiles, one apart, remain), the others 2-13 px. (Not
+    # against estimate_motion's vote: on this pool it is itself 25-30 px from
+    # SIFT on three pairs, confident look-alikes of the small tiles.)
     files = [str(p) for p in list_frames(data_path("sequences", "subvo_pool_chain"))]
     rows = run_odometry(files, tmp_path, mosaic=False, progress=False, workers=1).rows
     h, w = seahough.to_gray(files[0]).shape
@@ -857,7 +839,7 @@ def test_every_pool_step_agrees_with_an_independent_feature_fit(tmp_path):
         ref, inliers = _sift_similarity(files[a["index"]], files[b["index"]])
         assert inliers >= 600
         errors.append(float(np.max(np.hypot(*(apply_matrix(step, grid) - apply_matrix(ref, grid)).T))))
-    assert max(errors) < 0.025 * math.hypot(w, h), [round(e, 1) for e in errors]
+    assert max(errors) < 0.02 * math.hypot(w, h), [round(e, 1) for e in errors]
 
 
 def test_an_aging_keyframe_of_a_scene_in_relief_gives_way_to_the_nearer_frame(tmp_path):

@@ -49,6 +49,22 @@ RESCUE_DISTINCT = 0.5
 #: points and :func:`_sees_better` already in), answers off by more than 5 %
 #: 7 -> 5, within 2 % 175 -> 178, none lost, the same median time.
 MARGINAL = 0.4
+#: A vote's answer more confident than that is voted again at the coarse scale
+#: too when its runner-up candidate scores at least this share of its best's
+#: (at the working scale): a repeated texture. The real tiled pool's small
+#: mosaic tiles made the vote confident (0.47-0.73) in look-alikes 0.9-1.8 %
+#: of the diagonal off, runner-up shares 0.30-0.45 (test part of
+#: bench_real_pairs.py: found there); 40 real pairs of the other sequences at
+#: native size have 0.14-0.23, and 6 of the dev floors' 10 confident answers
+#: 0.29-0.55. Then the coarse vote ...
+REPEATED = 0.27
+#: ... disagreeing by more than this many coarse pixels at the frame's corners
+#: puts both answers to the test of :func:`_explains_more` (whatever the two
+#: confidences). A right answer's coarse vote lies 0.02-0.74 coarse px from it
+#: (the real pairs at native size, the dev floors), the pool's look-alikes
+#: 1.6-2.1. On the dev floors (seeds 200-239) one answer moved, 1.02 -> 0.05 %
+#: of the diagonal; on the real pairs the pool's three, 0.9-1.8 -> 0.2-0.3 %.
+SHIFTED = 1.0
 
 
 @dataclass
@@ -333,7 +349,10 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
     vote is at least as confident, both are refitted as homographies, and
     the one that matches a larger share of the frame's points that both keep
     in view is reported (as a homography, whichever it is;
-    :func:`_explains_more`). The dead reckoning does not ask for the
+    :func:`_explains_more`). So is a confident answer over a repeated
+    texture (its runner-up candidate scoring :data:`REPEATED` of its score)
+    whose coarse vote lies more than :data:`SHIFTED` coarse pixels from it,
+    however confident either. The dead reckoning does not ask for the
     check of the candidates
     (``perspective=False``): over the real tiled pool, in searches against a
     keyframe a few frames back, it confirmed look-alikes a tile or two off
@@ -349,14 +368,18 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
     own = None if d is None else PairMeasure(np.asarray(d.matrix, float), d.confidence,
                                               d.score, d.nfa)
     if d is not None and d.confidence >= min_confidence:
-        if coarse and rescue and d.confidence < MARGINAL:
+        repeated = d.confidence >= MARGINAL and _repeated(res)
+        if coarse and rescue and (d.confidence < MARGINAL or repeated):
             # a vote that barely prefers its answer: voted again at the coarse
             # scale; when that disagrees, and is at least as decided, both
             # refitted as homographies, and the one that explains more of the
             # frame is kept (on the real Skerki mud pair the coarse vote was
-            # wrong, at 0.25 against the vote's 0.27)
+            # wrong, at 0.25 against the vote's 0.27). A confident vote over a
+            # repeated texture: the same when the coarse vote disagrees at all
             vote = coarse_vote(pattern, gray, scale_range, angle_range, region, config, res)
-            if (vote is not None and vote.confidence >= max(min_confidence, d.confidence)
+            if vote is not None and (
+                    not vote.agrees(own.matrix, gray.shape, SHIFTED) if repeated else
+                    vote.confidence >= max(min_confidence, d.confidence)
                     and not vote.agrees(own.matrix, gray.shape)):
                 fine = _explains_more(vote, own, d, pattern, gray, scale_range, angle_range,
                                       region, config, res)
@@ -403,6 +426,14 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
     if fine is not None and fine.confidence >= min_confidence and fine.score >= min_score:
         return PairMeasure.of(fine)
     return own
+
+
+def _repeated(res) -> bool:
+    """Whether the search ``res``'s runner-up candidate scores at least
+    :data:`REPEATED` of its best's at the working scale (a repeated texture:
+    a tiled floor)."""
+    ws = sorted((c.work_score for c in res.candidates), reverse=True)
+    return len(ws) > 1 and ws[0] > 0 and ws[1] >= REPEATED * ws[0]
 
 
 #: Two answers of a pair are one when the frame's corners lie within this

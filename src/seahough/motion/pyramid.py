@@ -125,10 +125,10 @@ class CoarseVote:
     confidence: float      # the coarse vote's: its answer against its runner-up
     factor: float          # the coarse scale (coarse pixels a full-resolution pixel)
 
-    def agrees(self, matrix, shape) -> bool:
+    def agrees(self, matrix, shape, within: float = AGREE) -> bool:
         """Whether a 2x3 similarity puts the frame's corners within
-        :data:`AGREE` coarse pixels of this answer."""
-        return bool(corner_gap(self.matrix, matrix, shape) * self.factor <= AGREE)
+        ``within`` coarse pixels of this answer."""
+        return bool(corner_gap(self.matrix, matrix, shape) * self.factor <= within)
 
 
 def coarse_vote(pattern, gray, scale_range, angle_range, region, config, result
