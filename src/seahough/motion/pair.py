@@ -350,9 +350,11 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
     the one that matches a larger share of the frame's points that both keep
     in view is reported (as a homography, whichever it is;
     :func:`_explains_more`). So is a confident answer over a repeated
-    texture (its runner-up candidate scoring :data:`REPEATED` of its score)
-    whose coarse vote lies more than :data:`SHIFTED` coarse pixels from it,
-    however confident either. The dead reckoning does not ask for the
+    texture (the second-highest candidate scoring :data:`REPEATED` of the
+    highest's) whose coarse vote lies more than :data:`SHIFTED` coarse
+    pixels from it, however confident either; the answer reported then
+    carries the winner's confidence and evidence, and may fall under the
+    caller's thresholds (declined). The dead reckoning does not ask for the
     check of the candidates
     (``perspective=False``): over the real tiled pool, in searches against a
     keyframe a few frames back, it confirmed look-alikes a tile or two off
@@ -429,9 +431,10 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
 
 
 def _repeated(res) -> bool:
-    """Whether the search ``res``'s runner-up candidate scores at least
-    :data:`REPEATED` of its best's at the working scale (a repeated texture:
-    a tiled floor)."""
+    """Whether the second-highest of the search ``res``'s candidates scores
+    at least :data:`REPEATED` of the highest's at the working scale (a
+    repeated texture: a tiled floor; screened candidates, scored after a
+    short ICP, count as scored)."""
     ws = sorted((c.work_score for c in res.candidates), reverse=True)
     return len(ws) > 1 and ws[0] > 0 and ws[1] >= REPEATED * ws[0]
 
