@@ -321,3 +321,21 @@ def test_painted_takes_the_mask_and_its_thresholds():
     mask.reshape(-1)[:n] = True                                       # the mask on the paint
     assert painted(img, mask) is True
     assert painted(img, ~mask) is False                               # ... and on the ground
+
+
+def test_a_pattern_in_colour_only_is_not_found_in_a_grey_image():
+    """The orange board on sand of its grey level has no grey edge: in a grey
+    image (with edges of its own) the default search says "not found" and
+    why, rather than failing on the pattern; alone and as one pattern of a
+    Detector of several."""
+    crop = np.empty((80, 110, 3), np.uint8)
+    crop[:] = SAND
+    crop[20:60, 25:85] = ORANGE
+    grey = cv2.cvtColor(_scene(), cv2.COLOR_BGR2GRAY)
+    cv2.rectangle(grey, (10, 10), (100, 80), 255, -1)             # (something to see)
+    res = Detector(Pattern.from_image(crop), (2.0, 4.0)).search(grey)
+    assert res.detections == [] and "colour only" in res.note
+    many = Detector({"board": Pattern.from_image(crop), "rect": Pattern.rectangle(60, 40)},
+                    (1.0, 4.0)).search(grey)
+    assert many.parts["board"].detections == [] and "colour only" in many.parts["board"].note
+    assert many.parts["rect"].detections                            # (the white block)

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 from ..config import Config
 from .._validate import check_max_nfa, number
-from ..errors import ParameterError
+from ..errors import ParameterError, PatternError
 from ..io.images import read_image, to_image
 from .accumulator import (AccumulatorPlanes, accumulate, check_ranges, edge_gap, make_bins,
                           planes)
@@ -202,8 +202,20 @@ class Detector:
         if self.parts:
             return self._search_parts(image, features, t0)
         gray = to_image(image, cfg.colour, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
-        det = self._grey if self._grey is not None and gray.ndim == 2 else self
-        return det._search_pattern(gray, features, t0)
+        if self._grey is not None and gray.ndim == 2:
+            return self._grey._search_in_grey(gray, features, t0)
+        return self._search_pattern(gray, features, t0)
+
+    def _search_in_grey(self, gray, features, t0, name: str = "", factor=None) -> SearchResult:
+        """The search of a painted pattern's grey twin in a grey image: a
+        pattern told from its ground by colour alone has no grey edges, and
+        the image no colour to find it by: not found, and said."""
+        try:
+            return self._search_pattern(gray, features, t0, name, factor)
+        except PatternError:
+            return SearchResult([], None, features, 1.0 if factor is None else factor, [],
+                                {"total": time.perf_counter() - t0},
+                                note="grey image, pattern edges in colour only")
 
     def _search_pattern(self, gray, features: Features | None, t0: float,
                         name: str = "", factor: float | None = None) -> SearchResult:
@@ -364,8 +376,9 @@ class Detector:
                 shared[key] = extract_features(gray, key[0], fcfg, n_keypoints=key[1],
                                                weigh_colours=True)
         t1 = time.perf_counter()
-        results = {name: d._search_pattern(gray, shared[keys[name]], time.perf_counter(), name,
-                                           None if keys[name] is None else keys[name][0])
+        results = {name: (d._search_in_grey if d is not parts[name] else d._search_pattern)(
+                       gray, shared[keys[name]], time.perf_counter(), name,
+                       None if keys[name] is None else keys[name][0])
                    for name, (d, gray) in work.items()}
         timings = {"features": t1 - t0}
         for r in results.values():
