@@ -498,8 +498,8 @@ def report(recs: list[dict], odo: list[dict], args, seconds: float, allocator: s
                               f"{len(a)} answers off by more than 1 %")
     L += ["Where the test part falls short: " + ("; ".join(misses) if misses else "nowhere") + ". "
           f"For information, the test part without the forward-oblique {', '.join(OBLIQUE)} "
-          "(its motion is a perspective change: the similarity that fits it best depends on which "
-          "points are fitted): answered "
+          "(a camera looking ahead over a floor of small tiles: its motion is a perspective change, "
+          "and the tiles make look-alikes a tile off): answered "
           f"{pct(down['answered'], down['scored'])}, within 1 % {pct(down['good'], down['answered'])}.",
           ""]
     far = [r for r in recs if far_from_both(r)]
