@@ -334,7 +334,7 @@ def test_a_pattern_in_colour_only_is_not_found_in_a_grey_image():
     grey = cv2.cvtColor(_scene(), cv2.COLOR_BGR2GRAY)
     cv2.rectangle(grey, (10, 10), (100, 80), 255, -1)             # (something to see)
     res = Detector(Pattern.from_image(crop), (2.0, 4.0)).search(grey)
-    assert res.detections == [] and "colour only" in res.note
+    assert res.detections == [] and "colour only" in res.note and "too few edges" in res.note
     many = Detector({"board": Pattern.from_image(crop), "rect": Pattern.rectangle(60, 40)},
                     (1.0, 4.0)).search(grey)
     assert many.parts["board"].detections == [] and "colour only" in many.parts["board"].note

@@ -212,10 +212,10 @@ class Detector:
         the image no colour to find it by: not found, and said."""
         try:
             return self._search_pattern(gray, features, t0, name, factor)
-        except PatternError:
+        except PatternError as e:   # (the reason kept: it is what the note says)
             return SearchResult([], None, features, 1.0 if factor is None else factor, [],
                                 {"total": time.perf_counter() - t0},
-                                note="grey image, pattern edges in colour only")
+                                note=f"grey image, pattern edges in colour only: {e}")
 
     def _search_pattern(self, gray, features: Features | None, t0: float,
                         name: str = "", factor: float | None = None) -> SearchResult:

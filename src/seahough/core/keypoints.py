@@ -368,4 +368,3 @@ def spread_points(x, y, order, count):
     if best is None:
         best = K.spread_points(x, y, order, lo, count)
     return np.sort(best[:count])
-

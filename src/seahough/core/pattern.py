@@ -405,8 +405,7 @@ class Pattern:
     def _edges_from(self, config: Config) -> np.ndarray:
         """The image whose edges are the pattern's: its colours with
         ``config.colour`` (when it has any), else its grey levels."""
-        colour = getattr(self, "_colour", None)
-        return colour if colour is not None and self.in_colour(config) else self._gray
+        return self._colour if self.in_colour(config) else self._gray
 
     def has_long_borders(self, config: Config | None = None) -> bool:
         """Do the pattern's edges lie on long chains (a shape, a marker) rather
