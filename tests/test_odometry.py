@@ -185,6 +185,24 @@ def test_synthetic_path_drift_under_one_percent(tmp_path, path, seed):
     assert r["dx"] == pytest.approx(apply_matrix(pair, c)[0][0] - c[0][0])
 
 
+def test_a_high_rekey_overlap_measures_every_pair_directly(tmp_path):
+    """docs/odometry.md: with ``rekey_overlap=1.0`` each frame is the next one's
+    keyframe, so every step is a direct pair measurement; by default frames are
+    measured against keyframes two or more frames back."""
+    from seahough.config import OdometryTuning
+    frames, mats = _sequence("line", seed=0)
+    default = run_odometry(frames, tmp_path / "a", progress=False, mosaic=False).rows
+    direct = run_odometry(frames, tmp_path / "b", progress=False, mosaic=False,
+                          tuning=OdometryTuning(rekey_overlap=1.0)).rows
+    assert any(r["ref"] < r["index"] - 1 for r in default[1:])
+    assert all(r["status"] == "measured" and r["ref"] == r["index"] - 1 for r in direct[1:])
+    c = [[(SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0]]
+    for r in direct[1:]:
+        pair = np.asarray(r["pair_matrix"]).reshape(2, 3)
+        truth = compose(mats[r["index"]], invert_matrix(mats[r["index"] - 1]))
+        assert np.hypot(*(apply_matrix(pair, c) - apply_matrix(truth, c))[0]) < 1.5
+
+
 def test_known_heading_and_altitude_keep_them_fixed(tmp_path):
     frames, mats = S.sequence(_photo(), n_frames=8, frame_size=SHAPE, path="line", step=12.0,
                               seed=5, source="auto" if _photo() else "procedural")
