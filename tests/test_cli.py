@@ -213,6 +213,29 @@ def test_bad_image_among_good_ones(scenes):
     assert "Traceback" not in proc.stderr
 
 
+def test_detect_a_picture_that_cannot_be_written_loses_no_result(scenes, tmp_path):
+    """A folder in the way of one image's overlay: that image's results are
+    still printed, the error is one line on stderr, the next images are
+    searched and drawn, and the exit code is 2."""
+    d, _ = scenes
+    (tmp_path / "scene_overlay.png").mkdir()
+    proc = run("detect", d / "pattern.png", d / "scene.png", d / "neg.png", "--out", tmp_path,
+               "--json", "--quiet", "-j", "1")
+    assert proc.returncode == 2
+    recs = [json.loads(line) for line in proc.stdout.splitlines()]
+    assert [Path(r["file"]).name for r in recs] == ["scene.png", "neg.png"]
+    assert recs[0]["found"] and "overlay" not in recs[0]
+    assert "scene_overlay.png: cannot write the figure" in recs[0]["picture_error"]
+    assert recs[1]["overlay"] == str(tmp_path / "neg_overlay.png") and "picture_error" not in recs[1]
+    assert (tmp_path / "neg_edges.png").is_file()
+    err = proc.stderr.strip().splitlines()
+    assert len(err) == 1 and "scene_overlay.png: cannot write the figure" in err[0]
+    assert "Traceback" not in proc.stderr
+    # the table form prints the found image's detections before the error
+    proc = run("detect", d / "pattern.png", d / "scene.png", "--out", tmp_path, "--quiet")
+    assert proc.returncode == 2 and "1 found" in proc.stdout
+
+
 def test_detect_out_writes_pngs(scenes, tmp_path):
     d, _ = scenes
     from seahough.viz import detections_size

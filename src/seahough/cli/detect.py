@@ -112,9 +112,11 @@ def _max_width_callback(ctx, param, value):
 def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir,
                 max_width=None):
     """Read and search one image, and write its pictures (``stem`` given):
-    ``(result, (h, w), ms, written)``, or the SeahoughError that stopped
-    reading or searching it. Runs in a worker thread: the kernels release
-    the GIL, and the pictures are drawn on their own Agg figures."""
+    ``(result, (h, w), ms, written, failed)``, or the SeahoughError that
+    stopped reading or searching it. ``failed``: the WriteError of a picture
+    that could not be written (the result stands; the pictures after it are
+    not drawn). Runs in a worker thread: the kernels release the GIL, and the
+    pictures are drawn on their own Agg figures."""
     from ..io.images import read_image
 
     cfg = detector.config
@@ -125,33 +127,47 @@ def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir,
     except SeahoughError as e:
         return e
     ms = 1000.0 * (time.perf_counter() - t0)
-    written = {}
+    written: dict = {}
+    failed = None
     if stem is not None:
-        from .. import viz as plot
+        try:
+            _pictures(name, img, res, detector, pat, out_dir / stem, max_width, written)
+        except SeahoughError as e:
+            failed = e
+    return res, img.shape[:2], ms, written, failed
 
-        dets = res.detections
-        n = len(dets)
-        why = f" ({res.note})" if res.note else ""
-        head = f"{Path(name).name}: " + (f"not found{why}" if n == 0 else
-                                         f"{n} detection{'s' if n > 1 else ''}")
-        ov = out_dir / f"{stem}_overlay.png"
-        if isinstance(detector, CurveSearch):    # curves: the overlay only
-            head = f"{Path(name).name}: " + (f"{n} curve{'s' if n > 1 else ''}" if n
-                                             else "no curve found")
-            plot.plot_curves(img, dets, ov, title=head, max_width=max_width)
-            return res, img.shape[:2], ms, {"overlay": str(ov)}
-        ac = out_dir / f"{stem}_accumulator.png"
-        ed = out_dir / f"{stem}_edges.png"
-        plot.plot_detections(img, dets, ov, pattern=pat, title=head, max_width=max_width)
-        acc_dets, acc_title = dets, f"{Path(name).name}: accumulator"
-        if detector.parts:   # the planes are the first pattern's: its detections only
-            first = next(iter(detector.parts))
-            acc_dets = [d for d in dets if d.pattern == first]
-            acc_title += f" of pattern {first}"
-        plot.plot_accumulator(res.planes, acc_dets, ac, title=acc_title, note=res.note)
-        plot.plot_edges(img, res.features, ed, title=f"{Path(name).name}: what the detector sees")
-        written = {"overlay": str(ov), "accumulator": str(ac), "edges": str(ed)}
-    return res, img.shape[:2], ms, written
+
+def _pictures(name: str, img, res, detector: Detector, pat, base: Path, max_width,
+              written: dict) -> None:
+    """Draw one image's pictures at ``base``_overlay.png (and _accumulator.png,
+    _edges.png but for curves), adding each file written to ``written``."""
+    from .. import viz as plot
+
+    dets = res.detections
+    n = len(dets)
+    why = f" ({res.note})" if res.note else ""
+    head = f"{Path(name).name}: " + (f"not found{why}" if n == 0 else
+                                     f"{n} detection{'s' if n > 1 else ''}")
+    ov = Path(f"{base}_overlay.png")
+    if isinstance(detector, CurveSearch):    # curves: the overlay only
+        head = f"{Path(name).name}: " + (f"{n} curve{'s' if n > 1 else ''}" if n
+                                         else "no curve found")
+        plot.plot_curves(img, dets, ov, title=head, max_width=max_width)
+        written["overlay"] = str(ov)
+        return
+    plot.plot_detections(img, dets, ov, pattern=pat, title=head, max_width=max_width)
+    written["overlay"] = str(ov)
+    acc_dets, acc_title = dets, f"{Path(name).name}: accumulator"
+    if detector.parts:   # the planes are the first pattern's: its detections only
+        first = next(iter(detector.parts))
+        acc_dets = [d for d in dets if d.pattern == first]
+        acc_title += f" of pattern {first}"
+    ac = Path(f"{base}_accumulator.png")
+    plot.plot_accumulator(res.planes, acc_dets, ac, title=acc_title, note=res.note)
+    written["accumulator"] = str(ac)
+    ed = Path(f"{base}_edges.png")
+    plot.plot_edges(img, res.features, ed, title=f"{Path(name).name}: what the detector sees")
+    written["edges"] = str(ed)
 
 
 def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, max_width=None):
@@ -313,7 +329,7 @@ def _report(outcomes, bar, say, as_json: bool, quiet: bool) -> tuple[int, int]:
             say.error(f"{printable(name)}: {printable(_problem(done, name))}")
             n_bad += 1
             continue
-        res, (h, w), ms, written = done
+        res, (h, w), ms, written, failed = done
         dets = res.detections
         # why the search could not run (SearchResult.note), e.g. " (no edges)"
         why = f" ({res.note})" if res.note else ""
@@ -324,6 +340,8 @@ def _report(outcomes, bar, say, as_json: bool, quiet: bool) -> tuple[int, int]:
                    "note": res.note, "detections": [d.to_dict() for d in dets],
                    "time_ms": round(ms, 3)}
             rec.update(written)
+            if failed is not None:
+                rec["picture_error"] = str(failed)
             say(_dumps(rec))
         else:
             # (a name's control characters escaped: a newline must not split the table)
@@ -335,4 +353,8 @@ def _report(outcomes, bar, say, as_json: bool, quiet: bool) -> tuple[int, int]:
                 say(f"{printable(name)}  {w}x{h}  not found{why}  ({ms:.0f} ms)")
             if written and not quiet:
                 say("  wrote " + ", ".join(printable(v) for v in written.values()))
+        if failed is not None:
+            # (the image's results are printed above; its pictures stop here, the run goes on)
+            say.error(printable(str(failed)))
+            n_bad += 1
     return n_bad, n_missing
