@@ -22,6 +22,7 @@ def _scene():
     lambda g: cv2.cvtColor(g, cv2.COLOR_GRAY2BGR),
     lambda g: cv2.cvtColor(g, cv2.COLOR_GRAY2BGRA),
     lambda g: g.astype(np.uint16) * 257,
+    lambda g: g.astype(np.uint16) * 16,     # 12-bit data in a 16-bit array
     lambda g: g.astype(np.float32) / 255.0,
     lambda g: g.astype(np.float64),
     lambda g: g.astype(np.int32),
@@ -31,6 +32,28 @@ def test_every_accepted_form_gives_the_same_grey_levels(conv):
     out = to_gray(conv(g))
     assert out.dtype == np.float32 and out.shape == g.shape
     assert np.abs(out - g).max() < 1.0
+
+
+def test_twelve_bit_frames_are_searched_as_their_eight_bit_originals(tmp_path):
+    """A camera's 12-bit samples in 16-bit files (values up to 4095): edges,
+    detections and motion as in the 8-bit frames (read as 16-bit data they
+    would be 16 times darker and nothing would be found)."""
+    import seahough
+    from seahough.io.images import TWELVE_BIT
+
+    g = _scene()
+    twelve = g.astype(np.uint16) * 16
+    assert twelve.max() <= TWELVE_BIT
+    p = tmp_path / "twelve.png"
+    cv2.imwrite(str(p), twelve)
+    assert np.abs(to_gray(p) - g).max() < 1.0
+    det = seahough.Detector(seahough.Pattern.rectangle(60, 40), (0.8, 1.25))
+    a, b = det.detect(g), det.detect(p)
+    assert len(a) == len(b) == 1 and abs(a[0].x - b[0].x) < 0.5 and abs(a[0].y - b[0].y) < 0.5
+    # one value past 4095: 16-bit data, divided by 257
+    wide = twelve.copy()
+    wide[0, 0] = TWELVE_BIT + 1
+    assert to_gray(wide).max() == pytest.approx((TWELVE_BIT + 1) / 257.0)
 
 
 def test_paths_are_read(tmp_path):

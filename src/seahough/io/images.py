@@ -261,7 +261,8 @@ def to_gray(image, *, name: str = "image", max_pixels: int = 200_000_000,
     """A path or array as a float32 grey image with grey levels in [0, 255].
 
     Accepts grey (HxW or HxWx1), BGR or BGRA arrays of dtype uint8, uint16,
-    other integers, bool or float. uint16 is divided by 257; floats whose
+    other integers, bool or float. uint16 is divided by 257 (by 4095 / 255
+    when no value exceeds 4095: 12-bit data, :data:`TWELVE_BIT`); floats whose
     maximum is at most 1 are taken as [0, 1] and multiplied by 255. A path
     is read by :func:`read_image` (with ``max_pixels``, ``max_memory_mb``
     and ``orientation``).
@@ -355,11 +356,31 @@ def _levels(image, label, max_pixels, min_side, max_memory_mb, orientation) -> n
         if a.max(initial=0) <= 1.0 and a.min(initial=0) >= 0.0:
             a *= 255.0
     elif a.dtype == np.uint16:
+        div = uint16_divisor(a)
         a = a.astype(np.float32)
-        a /= 257.0
+        a /= div
     elif a.dtype != np.uint8:
         a = a.astype(np.float32)
     return a
+
+
+#: A 16-bit image none of whose values exceeds this is taken as 12-bit data
+#: (machine-vision and vehicle cameras store their 10- or 12-bit samples in
+#: 16-bit files): divided by 4095 / 255, not 65535 / 255, so that its edges
+#: have the contrast of the 8-bit image (a 12-bit frame read as 16-bit data
+#: is 16 times darker: its edges fall under ``Config.min_gradient``).
+TWELVE_BIT = 4095
+
+
+def uint16_divisor(a: np.ndarray) -> float:
+    """What a uint16 image is divided by to give levels 0-255: 4095 / 255 when
+    no value exceeds :data:`TWELVE_BIT` (12-bit data), else 257 (16-bit).
+
+    >>> uint16_divisor(np.array([0, 4095], np.uint16)) * 255 / 4095, uint16_divisor(
+    ...     np.array([0, 4096], np.uint16))
+    (1.0, 257.0)
+    """
+    return 4095.0 / 255.0 if int(a.max(initial=0)) <= TWELVE_BIT else 257.0
 
 
 def _grey(a: np.ndarray) -> np.ndarray:
@@ -374,7 +395,8 @@ def to_bgr8(image) -> np.ndarray:
     """An image array as 8-bit BGR, for writing and drawing.
 
     Grey (HxW or HxWx1), BGR and BGRA arrays are accepted. uint8 is kept
-    as it is; uint16 is divided by 257; floats whose maximum is at most 1 are
+    as it is; uint16 is divided by 257 (or as 12-bit data, :func:`uint16_divisor`);
+    floats whose maximum is at most 1 are
     taken as [0, 1] and multiplied by 255, other floats and integers are
     clipped to [0, 255] (NaN becomes 0).
 
@@ -391,7 +413,7 @@ def to_bgr8(image) -> np.ndarray:
     if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[2] not in (3, 4)):
         raise ImageValueError(f"expected a grey, BGR or BGRA image, got an array of shape {a.shape}")
     if a.dtype == np.uint16:
-        a = a.astype(np.float32) / 257.0
+        a = a.astype(np.float32) / uint16_divisor(a)
     if a.dtype != np.uint8:
         a = a.astype(np.float32)
         if a.size and np.nanmax(a) <= 1.0:
