@@ -183,7 +183,7 @@ def test_no_marker_exits_1(scenes):
 
 
 @pytest.mark.parametrize("case", ["missing", "text_png", "scale_range", "shape_spec",
-                                  "shape_numbers", "pattern_missing"])
+                                  "shape_numbers", "pattern_missing", "shape_bare"])
 def test_bad_input_exits_2_with_one_line(scenes, case):
     d, _ = scenes
     args, needle = {
@@ -194,6 +194,8 @@ def test_bad_input_exits_2_with_one_line(scenes, case):
         "shape_spec": (("detect", "hexagon:3", d / "scene.png"), "hexagon:3"),
         "shape_numbers": (("detect", "rect:60", d / "scene.png"), "rect:60"),
         "pattern_missing": (("detect", d / "nopattern.png", d / "scene.png"), "nopattern.png"),
+        # a shape's name without its sizes (and no file of that name): the syntax is named
+        "shape_bare": (("detect", "circle", d / "scene.png"), "needs its sizes: circle:R"),
     }[case]
     proc = run(*args)
     assert_one_error_line(proc, needle)
@@ -629,6 +631,12 @@ def test_demo_end_to_end(tmp_path):
         assert im.std() > 5, f"{name} is (almost) blank"
     assert "marker position" in proc.stdout and "rope offset" in proc.stdout
     assert "drift" in proc.stdout
+    # without --quiet, the list of pictures names every file written (and the frames' range)
+    proc = run("demo", "--out", tmp_path / "demo2", timeout=120)
+    listed = proc.stdout.split("pictures in ", 1)[1].split("\n", 1)[0]
+    for name in want:
+        if not name.startswith("sequence/"):
+            assert name in listed, name
 
 
 def test_detect_searches_a_painted_pattern_in_colour_unless_told_grey(tmp_path):

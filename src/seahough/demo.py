@@ -156,6 +156,7 @@ def run_demo(out="seahough-demo", *, progress: bool = False,
     d = outcome.marker = _search(o, "marker", scene, Pattern.from_image(pat_img),
                                  "Pattern.from_image(clean marker), scale 0.5-2, any rotation",
                                  written, edges=True, scale_range=(0.5, 2.0))
+    written.append("marker_pattern.png")
     _add_rows(outcome, None if d is None else [
         ("marker position", f"({d.x:.1f}, {d.y:.1f}) px", f"({tr.x:.1f}, {tr.y:.1f}) px",
          f"{math.hypot(d.x - tr.x, d.y - tr.y):.2f} px"),

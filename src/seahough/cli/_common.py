@@ -386,7 +386,9 @@ def parse_pattern(spec: str, polarity: str | None = None, mask: str | None = Non
         if sep and len(kind) > 1:
             raise click.BadParameter(f"{spec!r} is neither an image file nor a shape "
                                      f"({SHAPES_HELP})", param_hint="PATTERN")
-        raise _Fail(f"pattern {spec}: no such file")
+        hint = (f" (a shape needs its sizes: {_SHAPE_USAGE[spec.lower()]})"
+                if spec.lower() in _SHAPE_USAGE else "")
+        raise _Fail(f"pattern {spec}: no such file{hint}")
     try:
         return Pattern.from_image(spec, mask=mask, polarity=_IMAGE_POLARITY[polarity or "same"],
                                   config=config)

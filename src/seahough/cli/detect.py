@@ -213,7 +213,10 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, max_width=No
               help="Rotations to search, degrees counter-clockwise; LOW = HIGH: known rotation.")
 @click.option("--max-results", "-n", type=click.IntRange(min=1), default=_DET["max_results"],
               show_default=True,
-              help="At most this many detections per image.")
+              help="At most this many detections per image. A detection's confidence is "
+              "measured against the best candidate left out: with more objects in view than "
+              "this, the ones reported are measured against the others and may come out "
+              "ambiguous (ask for as many as there may be).")
 @click.option("--min-score", type=click.FloatRange(0.0, 1.0), default=_DET["min_score"],
               show_default=True,
               help="Least share of the pattern's edges that must be found.")
@@ -289,9 +292,11 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     of the IMAGE arguments.
 
     \b
-    Exit status: 0 the pattern was found in every image; 1 it was not found
-    in some image; 2 bad input (the good images' results are still printed,
-    each bad file gets one line on stderr).
+    Exit status: 0 the pattern was found in every image (several patterns:
+    at least one of them in every image; each detection names its pattern);
+    1 nothing was found in some image; 2 bad input or a picture that could
+    not be written (the good images' results are still printed, each
+    problem gets one line on stderr).
 
     \b
     Example:

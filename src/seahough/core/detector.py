@@ -100,7 +100,12 @@ class Detector:
     config : Config, optional
         Tuning of every stage.
     max_results : int
-        At most this many detections.
+        At most this many detections. Each detection's confidence is
+        measured against the best candidate left out (docs/method.md), so
+        it depends on this number: with two buoys in view and
+        ``max_results=1``, the one reported is measured against the other
+        (``ambiguous`` when that one is as good); ask for as many as there
+        may be objects.
     min_score : float
         A detection must have at least this share of the pattern's edges.
     min_confidence : float
@@ -226,9 +231,10 @@ class Detector:
         p = self.pattern
         s0, s1 = self.scale_range
         angles = self._angles()
-        # a pattern that cannot fit the image at any searched scale is not there;
-        # larger scales than that are not searched (they would only size the
-        # accumulator)
+        # a pattern more than twice the image's diagonal at every searched scale is
+        # not there (up to that, an object larger than the frame may be partly in
+        # view: it is searched); larger scales than that are not searched (they
+        # would only size the accumulator)
         fit = 2.0 * math.hypot(*gray.shape[:2]) / p.extent
         s1 = min(s1, max(fit, s0))
         if factor is None:

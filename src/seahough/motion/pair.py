@@ -186,6 +186,16 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
     ImageSizeError
         A frame side under :data:`MIN_MOTION_SIDE` (64 px): too little of
         the scene to tell the motion from a look-alike.
+    PatternError
+        The previous frame has too few edges to be searched for (a blank
+        or featureless frame: "previous frame: ... too few edges"). A
+        current frame without edges is not an error: the motion is unknown
+        (None).
+    ParameterError
+        A bad parameter, or frames of different sizes.
+    ImageReadError, ImageValueError
+        A frame path that cannot be read; an array that is not an image
+        (docs/errors.md).
 
     Examples
     --------
