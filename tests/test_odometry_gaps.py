@@ -157,6 +157,23 @@ def test_with_no_motion_measured_yet_zero_motion_is_assumed(tmp_path):
     assert (r["x"], r["y"], r["heading"]) == (res.rows[0]["x"], res.rows[0]["y"], 0.0)
 
 
+def test_frames_without_edges_are_flagged_few_edges_not_no_match(tmp_path):
+    """Open water before the seabed comes into view (flat frames), then a blank
+    frame in the middle: the pairs that cannot be measured say why (few_edges);
+    a frame of somewhere else, which has edges, is not few_edges."""
+    frames, _ = _line(n=8, seed=2)
+    flat = np.full_like(frames[0], 90)
+    frames = [flat, flat] + list(frames[:3]) + [flat] + list(frames[3:5]) + [
+        S.seabed(SHAPE, seed=99)]                          # a frame of somewhere else
+    res = run_odometry(frames, tmp_path, progress=False, mosaic=False)
+    why = [r["flags"].split("; ")[0] if r["flags"] else "" for r in res.rows]
+    assert why[1] == why[2] == "few_edges"      # the first keyframe is open water
+    assert why[3] == why[4] == ""               # the seabed: measured
+    assert why[5] == "few_edges"                # a blank frame
+    assert why[6] == why[7] == "", why
+    assert why[8] in ("no_match", "low_confidence"), why   # edges, but not these
+
+
 def test_the_trajectory_picture_marks_assumed_poses(tmp_path):
     frames, _ = _line()
     res = run_odometry(_with_gap(frames, 6), tmp_path, progress=False, mosaic=False)

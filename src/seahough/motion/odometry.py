@@ -206,7 +206,10 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
       ``low_confidence`` (one was found, but not distinct from its
       runner-up, or matching far worse than the last frames did),
       ``little_overlap`` (one was found, but too little of the reference is
-      in view): no step measured the pair (the reason of the best attempt).
+      in view), ``few_edges`` (every attempt had a frame with too few edges
+      to be measured: open water, featureless sand, a frame too dark or
+      washed out): no step measured the pair (the reason of the best
+      attempt).
       The frame's pose is *assumed*: the last measured pose carried on by
       the last measured motion per frame, flagged ``pose_assumed: constant
       velocity since frame N`` (N: the last measured frame); before any
@@ -446,7 +449,8 @@ def _measure_frame(row, i, gray, feats, st: State, searcher: _Searcher, load):
         reasons.append(why)
     if res is None:
         _assume(row, st, "low_confidence" if "low_confidence" in reasons else (
-            "little_overlap" if "little_overlap" in reasons else "no_match"))
+            "little_overlap" if "little_overlap" in reasons else (
+                "few_edges" if all(r == "few_edges" for r in reasons) else "no_match")))
         return
     if _doubtful(res, st, searcher.tuning):
         res = _checked(res, i, gray, feats, st, searcher, load, ref_rate)

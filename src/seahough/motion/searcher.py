@@ -11,10 +11,13 @@ A pair that is not accepted comes back with the reason it failed:
   runner-up, or its edges in view match far worse than in the last
   measured frames (a frame of somewhere else, a fish, silt);
 - ``little_overlap``: a pose was found, but too little of the reference is
-  still in view to trust it.
+  still in view to trust it;
+- ``few_edges``: the reference frame or the current one has too few edges
+  to be measured at all (open water, featureless sand, a frame too dark or
+  washed out).
 
 >>> sorted(REASONS)
-['little_overlap', 'low_confidence', 'no_match']
+['few_edges', 'little_overlap', 'low_confidence', 'no_match']
 """
 
 from __future__ import annotations
@@ -35,7 +38,10 @@ __all__ = ["Measure", "Searcher", "REASONS", "WIDEN"]
 _SAME = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
 #: Why a pair was not measured (the first word of a flagged row's ``flags``).
-REASONS = ("no_match", "low_confidence", "little_overlap")
+REASONS = ("no_match", "low_confidence", "little_overlap", "few_edges")
+#: A frame with fewer edge segments than this at the working scale has too few
+#: edges to be measured (the Detector's "no edges").
+MIN_SEGMENTS = 4
 #: The last attempt before a pair is flagged (``wide``) searches this many
 #: times the full search's shift region, and the per-frame ranges widened as
 #: for this many times the frames of the gap.
@@ -152,8 +158,8 @@ class Searcher:
         ranges widened over ``n`` frames, the shift region and the ranges
         ``widen`` times the full search's."""
         pattern = ref.get_pattern(self.cfg)
-        if pattern is None:
-            return None, "no_match"
+        if pattern is None or len(feats.segments) < MIN_SEGMENTS:
+            return None, "few_edges"
         h, w = self.shape
         c = frame_centre(self.shape)
         ox, oy = self.off
