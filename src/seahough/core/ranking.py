@@ -84,6 +84,10 @@ class Detection:
         be expected to find per image by chance, in an image like this one
         holding no such object (:mod:`seahough.core.nfa`). The smaller, the
         stronger the evidence; the Detector accepts ``nfa <= max_nfa``.
+        It tells an answer from chance, not from other real structure: a
+        part of a larger frame, a similar prop or a tile one period on is
+        not chance and can have a tiny NFA; ``confidence`` and the flag
+        ``ambiguous`` are what see those (docs/nfa.md).
     pattern : str
         Which pattern this is, for a Detector of several named patterns
         (``""`` for a Detector of one pattern).
