@@ -514,7 +514,7 @@ def test_odometry_command_prints_the_canonical_summary_keys(tmp_path, monkeypatc
             cli.main(argv)
         assert ex.value.code == 0
         assert capsys.readouterr().out.splitlines() == [
-            f"frames: 3   flagged pairs: 0   {want}   time per frame: 12 ms"]
+            f"frames: 3   flagged frames: 0   {want}   time per frame: 12 ms"]
     with pytest.raises(SystemExit):
         cli.main(argv + ["--json"])
     got = json.loads(capsys.readouterr().out)

@@ -150,7 +150,7 @@ def report(result, seconds: float, unit: str, as_json: bool) -> int:
     if as_json:
         click.echo(_dumps(summ))
         return status
-    click.echo(f"frames: {summ['frames']}   flagged pairs: {summ['flagged_pairs']}   "
+    click.echo(f"frames: {summ['frames']}   flagged frames: {summ['flagged_pairs']}   "
                f"distance: {summ['distance']:.2f} {summ['unit']}   "
                f"time per frame: {summ['time_per_frame_ms']:.0f} ms")
     n_flagged = 0
