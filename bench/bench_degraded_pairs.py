@@ -195,6 +195,7 @@ def main(argv=None) -> str:
     ap.add_argument("--quick", action="store_true", help="Sparus, 4 pairs (smoke test)")
     ap.add_argument("--write", action="store_true",
                     help=f"write the report to {DOC.relative_to(ROOT)}")
+    ap.add_argument("--out", default=None, help="write the report here instead")
     args = ap.parse_args(argv)
     if args.quick and args.write:
         ap.error("--quick with --write would replace the page by a smoke test")
@@ -207,8 +208,9 @@ def main(argv=None) -> str:
     rows = run(args.quick)
     text = report(rows, time.perf_counter() - t0, allocator)
     print(text)
-    if args.write:
-        write_page(text, str(DOC))
+    out = args.out or (str(DOC) if args.write else None)
+    if out:
+        write_page(text, out)
     return text
 
 

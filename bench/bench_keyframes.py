@@ -96,6 +96,7 @@ def simulated(tuning, runs) -> tuple[list[float], list[float]]:
 def main(argv=None) -> str:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="Sparus and one simulated run")
+    ap.add_argument("--out", default=None, help="also write the table to this file")
     args = ap.parse_args(argv)
     data = shared_data_dir()
     if data is None or not (data / "sequences").is_dir():
@@ -127,6 +128,8 @@ def main(argv=None) -> str:
                  + " |")
     text = "\n".join(lines)
     print(text)
+    if args.out:
+        Path(args.out).write_text(text + "\n")
     return text
 
 

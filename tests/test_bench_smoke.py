@@ -269,6 +269,35 @@ def test_small_patch_benchmark_quick(tmp_path):
         assert int(found.group(2)) == 2 and int(found.group(1)) + int(r[3]) <= 2, r
 
 
+def test_degraded_pairs_benchmark_quick(tmp_path):
+    """bench/bench_degraded_pairs.py --quick: every degradation and method, counts that add up."""
+    if shared_data_dir() is None:
+        pytest.skip("real data (../shared/data) is not present beside this checkout")
+    text = _quick_page(ROOT / "bench" / "bench_degraded_pairs.py", tmp_path / "degraded.md")
+    assert "Machine:" in text and "## Tune part" in text
+    rows = _rows(_section(text, "## Tune part"))[1:]
+    assert len(rows) == 8 * 3          # degradations x methods
+    for r in rows:
+        pairs, answered = int(r[2]), int(r[3])
+        within, of = (int(v) for v in r[4].split("/"))
+        assert pairs == 4 and of == answered <= pairs and within + int(r[5]) <= answered, r
+    # the frames as recorded: seahough measures every Sparus pair within 1 %
+    assert rows[0][:5] == ["as recorded", "**seahough**", "4", "4", "4/4"]
+
+
+def test_keyframes_benchmark_quick(tmp_path):
+    """bench/bench_keyframes.py --quick: both settings on Sparus and a simulated run."""
+    if shared_data_dir() is None:
+        pytest.skip("real data (../shared/data) is not present beside this checkout")
+    text = _quick_page(ROOT / "bench" / "bench_keyframes.py", tmp_path / "keyframes.md")
+    rows = _rows(text)
+    assert rows[0][2:] == ["default (keyframes)", "rekey_overlap=1.0 (every frame)"]
+    assert rows[1][0].startswith("sparus_auv_seabed") and rows[1][1] == "tune"
+    assert rows[2][0].startswith("simulated, 1 runs")
+    steps = [float(re.search(r"median step ([\d.]+) %", c).group(1)) for c in rows[1][2:]]
+    assert all(0 < v < 1 for v in steps)
+
+
 def test_real_pairs_reference_rule():
     """The reference of two fits is their mean where their corners agree within
     0.5 % of the diagonal, none otherwise; the KLT fit recovers a known motion."""
