@@ -238,6 +238,35 @@ def test_detect_a_picture_that_cannot_be_written_loses_no_result(scenes, tmp_pat
     assert proc.returncode == 2 and "1 found" in proc.stdout
 
 
+def test_bit_depth_option_reads_twelve_bit_files(tmp_path):
+    """A pool photo and three survey frames saved as a 12-bit camera saves them
+    (16-bit PNG, values up to 4095): found and measured with --bit-depth 12,
+    too dark without (not found; odometry flags the pairs few_edges)."""
+    data = shared_data_dir()
+    if data is None:
+        pytest.skip("real data (../shared/data) is not present beside this checkout")
+    photo = data / "objects" / "robosub_transdec" / "images" / "1448.jpg"
+    p = tmp_path / "b12.png"
+    cv2.imwrite(str(p), cv2.imread(str(photo), cv2.IMREAD_GRAYSCALE).astype(np.uint16) * 16)
+    proc = run("detect", "circle:16", p, "--json")
+    assert proc.returncode == 1 and json.loads(proc.stdout)["found"] is False
+    proc = run("detect", "circle:16", p, "--json", "--bit-depth", "12")
+    assert proc.returncode == 0 and len(json.loads(proc.stdout)["detections"]) == 3
+    assert_one_error_line(run("detect", "circle:16", p, "--bit-depth", "8"), "--bit-depth")
+    seq = tmp_path / "seq"
+    seq.mkdir()
+    for i in range(3):
+        f = cv2.imread(str(data / "sequences" / "sparus_auv_seabed" / f"frame_{i:03d}.png"),
+                       cv2.IMREAD_GRAYSCALE)
+        cv2.imwrite(str(seq / f"f{i}.png"), f.astype(np.uint16) * 16)
+    proc = run("odometry", seq, "--out", tmp_path / "o16", "--quiet", "--no-mosaic")
+    assert proc.returncode == 1
+    with open(tmp_path / "o16" / "odometry.csv", newline="") as fh:
+        assert [r["flags"].split(";")[0] for r in csv.DictReader(fh)][1:] == ["few_edges"] * 2
+    proc = run("odometry", seq, "--out", tmp_path / "o12", "--quiet", "--bit-depth", "12")
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
 def test_detect_out_writes_pngs(scenes, tmp_path):
     d, _ = scenes
     from seahough.viz import detections_size

@@ -22,7 +22,6 @@ def _scene():
     lambda g: cv2.cvtColor(g, cv2.COLOR_GRAY2BGR),
     lambda g: cv2.cvtColor(g, cv2.COLOR_GRAY2BGRA),
     lambda g: g.astype(np.uint16) * 257,
-    lambda g: g.astype(np.uint16) * 16,     # 12-bit data in a 16-bit array
     lambda g: g.astype(np.float32) / 255.0,
     lambda g: g.astype(np.float64),
     lambda g: g.astype(np.int32),
@@ -34,26 +33,45 @@ def test_every_accepted_form_gives_the_same_grey_levels(conv):
     assert np.abs(out - g).max() < 1.0
 
 
-def test_twelve_bit_frames_are_searched_as_their_eight_bit_originals(tmp_path):
-    """A camera's 12-bit samples in 16-bit files (values up to 4095): edges,
-    detections and motion as in the 8-bit frames (read as 16-bit data they
-    would be 16 times darker and nothing would be found)."""
-    import seahough
-    from seahough.io.images import TWELVE_BIT
+def test_bit_depth_reads_a_cameras_twelve_bits_in_sixteen_bit_arrays():
+    """``bit_depth=12``: values up to 4095 are read as the 8-bit levels they
+    stand for (by default, as 16-bit data: 16 times darker); beyond the
+    stated depth, 255; every frame alike, whatever its own largest value."""
+    from seahough.io.images import to_bgr8
 
     g = _scene()
     twelve = g.astype(np.uint16) * 16
-    assert twelve.max() <= TWELVE_BIT
-    p = tmp_path / "twelve.png"
-    cv2.imwrite(str(p), twelve)
-    assert np.abs(to_gray(p) - g).max() < 1.0
-    det = seahough.Detector(seahough.Pattern.rectangle(60, 40), (0.8, 1.25))
-    a, b = det.detect(g), det.detect(p)
-    assert len(a) == len(b) == 1 and abs(a[0].x - b[0].x) < 0.5 and abs(a[0].y - b[0].y) < 0.5
-    # one value past 4095: 16-bit data, divided by 257
-    wide = twelve.copy()
-    wide[0, 0] = TWELVE_BIT + 1
-    assert to_gray(wide).max() == pytest.approx((TWELVE_BIT + 1) / 257.0)
+    assert np.abs(to_gray(twelve, bit_depth=12) - g).max() < 1.0
+    assert to_gray(twelve).max() == pytest.approx(220 * 16 / 257.0)
+    over = twelve.copy()
+    over[0, 0] = 60000
+    got = to_gray(over, bit_depth=12)
+    assert got[0, 0] == 255.0 and np.array_equal(got[1:], to_gray(twelve, bit_depth=12)[1:])
+    assert np.abs(to_bgr8(twelve, 12)[..., 0].astype(float) - g).max() <= 1.0
+    # (a dark 16-bit image is drawn dark, not taken for [0, 1] floats)
+    assert to_bgr8(np.full((4, 4), 10, np.uint16)).max() == 0
+
+
+def test_bit_depth_lets_twelve_bit_frames_be_measured():
+    """Real frames saved as a 12-bit camera saves them: read as 16-bit data
+    the previous frame has too few edges to be searched for; with
+    ``Config(bit_depth=12)`` the motion is the 8-bit frames'."""
+    import seahough
+    from seahough.config import MOTION_CONFIG
+    from seahough.errors import PatternError
+
+    from seahough._data import shared_data_dir
+    d = shared_data_dir()
+    if d is None:
+        pytest.skip("real data (../shared/data) is not present beside this checkout")
+    seq = d / "sequences" / "sparus_auv_seabed"
+    a, b = (cv2.imread(str(seq / f"frame_{i:03d}.png"), cv2.IMREAD_GRAYSCALE) for i in (0, 1))
+    a12, b12 = a.astype(np.uint16) * 16, b.astype(np.uint16) * 16
+    with pytest.raises(PatternError, match="too few edges"):
+        seahough.estimate_motion(a12, b12)
+    want = seahough.estimate_motion(a, b)
+    got = seahough.estimate_motion(a12, b12, config=MOTION_CONFIG.replace(bit_depth=12))
+    assert np.abs(got.matrix - want.matrix).max() < 0.05
 
 
 def test_paths_are_read(tmp_path):

@@ -242,6 +242,13 @@ class Config:
         Image files whose reading and search would need more memory than
         this (MB, as :func:`seahough.io.images.memory_needed` models it from
         the header) are refused before decoding.
+    bit_depth : int or None
+        Significant bits of 16-bit images (9-16): a camera that stores 10-
+        or 12-bit samples in 16-bit files gives values up to 1023 or 4095,
+        which read as 16-bit data are 64 or 16 times too dark to show edges
+        (levels are divided by ``(2**bit_depth - 1) / 255``, and clipped to
+        255). None: 16 bits. Images of other types are not affected. Fixed
+        for a whole run, so that every frame is read alike.
     search : SearchTuning
         Fixed choices of the candidate and ranking stages.
     """
@@ -274,6 +281,7 @@ class Config:
     refine: bool = True
     max_pixels: int = 200_000_000
     max_memory_mb: float = MAX_MEMORY_MB
+    bit_depth: int | None = None
     search: SearchTuning = SearchTuning()
 
     def __post_init__(self) -> None:
@@ -309,6 +317,8 @@ class Config:
                 raise ParameterError(f"Config.{name}={v!r}: must be True or False"
                                      + (" (or None: colour for a painted pattern)"
                                         if name == "colour" else ""))
+        if self.bit_depth is not None:
+            check("bit_depth", lo=9, hi=16, integer=True)
         if not isinstance(self.search, SearchTuning):
             raise ParameterError("Config.search must be a seahough.config.SearchTuning")
         if self.voting not in VOTING_MODES:
@@ -329,6 +339,20 @@ class Config:
             if k not in names:
                 raise ParameterError(f"Config has no parameter {k!r}")
         return dataclasses.replace(self, **changes)
+
+
+def config_record(config: Config) -> dict:
+    """``config`` as plain values for a run's settings (what resuming a run
+    compares). Fields added after runs were made are left out while unset
+    (``bit_depth`` None), so that those runs can still be continued.
+
+    >>> "bit_depth" in config_record(Config()), config_record(Config(bit_depth=12))["bit_depth"]
+    (False, 12)
+    """
+    rec = dataclasses.asdict(config)
+    if rec.get("bit_depth") is None:
+        rec.pop("bit_depth", None)
+    return rec
 
 
 #: The configuration :func:`~seahough.estimate_motion` uses unless given one:

@@ -208,8 +208,17 @@ _SHAPE_USAGE = {"rect": "rect:W,H (e.g. rect:60,40)", "rectangle": "rect:W,H (e.
                 "polyline": "polyline:WIDTH:x1,y1,x2,y2,... (e.g. polyline:6:0,80,0,0,60,0,60,80)"}
 
 
+def bit_depth_option(f):
+    """``--bit-depth N`` (``Config.bit_depth``), for detect and odometry."""
+    return click.option("--bit-depth", type=click.IntRange(9, 16), default=None, metavar="N",
+                        help="Significant bits of 16-bit images: a camera's 10- or 12-bit "
+                        "samples in 16-bit files (read as 16-bit data they are 64 or 16 times "
+                        "too dark to show edges). Default: 16.")(f)
+
+
 def make_detector(pattern, scale_range, angle_range, max_results, min_score, min_confidence,
-                  downscale, keypoints, equalize, polarity, mask, max_nfa=1.0, colour=None):
+                  downscale, keypoints, equalize, polarity, mask, max_nfa=1.0, colour=None,
+                  bit_depth=None):
     """The Detector that the search options of ``seahough detect`` (also
     taken by ``survey detect``) describe; PATTERN as :func:`parse_pattern`.
 
@@ -230,6 +239,8 @@ def make_detector(pattern, scale_range, angle_range, max_results, min_score, min
         cfg_kw["equalize"] = True
     if colour is not None:
         cfg_kw["colour"] = bool(colour)
+    if bit_depth is not None:
+        cfg_kw["bit_depth"] = int(bit_depth)
     config = Config(**cfg_kw)
     kind, sep, rest = pattern.partition(":")
     if sep and kind.strip().lower() == "curve" and not Path(pattern).is_file():

@@ -11,6 +11,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import click
+import numpy as np
 
 from ..config import Config
 from ..core.detector import FLAG_ALONG_LINE, Detector
@@ -18,8 +19,8 @@ from ..errors import SeahoughError
 from ..geometry import format_angle
 from ..io.frames import printable
 from ._common import (CurveSearch, _Output, _dumps, _max_nfa_callback, _out_dir, _problem,
-                      _progress, _range_callback, _table, default_workers, make_detector,
-                      workers_option)
+                      _progress, _range_callback, _table, bit_depth_option, default_workers,
+                      make_detector, workers_option)
 
 # the command's defaults are the library's, so that both give the same results
 _DET = {k: v.default for k, v in inspect.signature(Detector.__init__).parameters.items()}
@@ -130,6 +131,10 @@ def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir,
     written: dict = {}
     failed = None
     if stem is not None:
+        if img.dtype == np.uint16 and cfg.bit_depth is not None:   # (drawn as searched)
+            from ..io.images import to_bgr8
+
+            img = to_bgr8(img, cfg.bit_depth)
         try:
             _pictures(name, img, res, detector, pat, out_dir / stem, max_width, written)
         except SeahoughError as e:
@@ -232,6 +237,7 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, max_width=No
 @click.option("--keypoints", type=click.IntRange(min=1), default=None,
               help=f"Number of most contrasted edge points kept (default {_CFG.n_keypoints}).")
 @click.option("--equalize", is_flag=True, help="Local contrast equalisation (haze, uneven light).")
+@bit_depth_option
 @click.option("--colour/--grey", "colour", default=None,
               help="Edges from every colour channel of a colour image (an object that differs "
                    "from its ground by hue more than by brightness), or from its grey levels "
@@ -256,8 +262,8 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, max_width=No
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar or notes; results only.")
 @workers_option("Images searched at once, in threads; results are printed in the order given")
 def detect(pattern, images, scale_range, angle_range, max_results, min_score, min_confidence,
-           max_nfa, downscale, keypoints, equalize, colour, polarity, mask, as_json, out, max_width,
-           quiet, workers):
+           max_nfa, downscale, keypoints, equalize, bit_depth, colour, polarity, mask, as_json, out,
+           max_width, quiet, workers):
     """Find PATTERN in each IMAGE.
 
     \b
@@ -304,7 +310,7 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     """
     detector = make_detector(pattern, scale_range, angle_range, max_results, min_score,
                              min_confidence, downscale, keypoints, equalize, polarity, mask,
-                             max_nfa=max_nfa, colour=colour)
+                             max_nfa=max_nfa, colour=colour, bit_depth=bit_depth)
     if max_width is not None and out is None:
         raise click.UsageError("--max-width sizes the pictures of --out: give --out DIR")
     pat = None if detector.parts else detector.pattern   # (the inset: one pattern only)

@@ -10,7 +10,8 @@ import click
 import numpy as np
 
 from ..io.frames import printable
-from ._common import _Fail, _dumps, _range_callback, _stderr_is_terminal, workers_option
+from ._common import (_Fail, _dumps, _range_callback, _stderr_is_terminal, bit_depth_option,
+                      workers_option)
 
 
 def _number(v) -> bool:
@@ -87,13 +88,14 @@ def _odometry_summary(result, wall_s: float, unit: str) -> dict:
 @click.option("--resume", is_flag=True, help="Continue a run interrupted in the same --out "
               "(the same frames and settings only).")
 @click.option("--no-mosaic", is_flag=True, help="Do not build the mosaic.")
+@bit_depth_option
 @click.option("--quiet", "-q", is_flag=True,
               help="No progress bar (shown on stderr only when it is a terminal).")
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON object.")
 @workers_option("Threads: the pairs are measured in turn while the coming frames are read and "
                 "prepared ahead; the same results for any number")
 def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, angle_range,
-             resume, no_mosaic, quiet, as_json, workers):
+             resume, no_mosaic, bit_depth, quiet, as_json, workers):
     """Dead reckoning: the camera's path from overlapping frames.
 
     \b
@@ -125,8 +127,17 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
                           altitude=altitude, focal_px=focal_px, scale_range=scale_range,
                           angle_range=angle_range, resume=resume,
                           progress=not quiet and _stderr_is_terminal(), mosaic=not no_mosaic,
-                          workers=workers)
+                          workers=workers, **_bits(bit_depth))
     return report(result, time.perf_counter() - t0, unit, as_json)
+
+
+def _bits(bit_depth) -> dict:
+    """``config=`` for a run of ``--bit-depth`` (nothing: the run's default)."""
+    if bit_depth is None:
+        return {}
+    from ..config import ODOMETRY_CONFIG
+
+    return {"config": ODOMETRY_CONFIG.replace(bit_depth=int(bit_depth))}
 
 
 def check_inputs(frames, metres_per_pixel, altitude, focal_px) -> None:

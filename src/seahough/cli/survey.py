@@ -24,10 +24,11 @@ __all__ = ["survey"]
 
 #: The options of ``seahough detect`` that ``survey detect`` takes too.
 SEARCH_OPTIONS = ("scale_range", "angle_range", "max_results", "min_score", "min_confidence",
-                  "max_nfa", "downscale", "keypoints", "equalize", "colour", "polarity", "mask")
+                  "max_nfa", "downscale", "keypoints", "equalize", "bit_depth", "colour",
+                  "polarity", "mask")
 #: The options of ``seahough odometry`` that ``survey odometry`` takes too.
 ODOMETRY_OPTIONS = ("metres_per_pixel", "altitude", "focal_px", "scale_range", "angle_range",
-                    "no_mosaic")
+                    "no_mosaic", "bit_depth")
 #: Error rows listed after a survey (the rest: in images.parquet).
 SHOW_ERRORS = 10
 
@@ -206,7 +207,7 @@ def odometry(frames, out, workers, scheduler, chunk_size, as_json, quiet, **opts
     Exit status: 0 every pair was measured; 1 some frames are flagged;
     2 bad input.
     """
-    from .odometry import check_inputs, report
+    from .odometry import _bits, check_inputs, report
 
     mpp, altitude, focal_px = opts["metres_per_pixel"], opts["altitude"], opts["focal_px"]
     check_inputs(frames, mpp, altitude, focal_px)
@@ -216,7 +217,8 @@ def odometry(frames, out, workers, scheduler, chunk_size, as_json, quiet, **opts
     paths = run(list(frames), out, workers=workers, scheduler=scheduler, chunk_size=chunk_size,
                 metres_per_pixel=mpp, altitude=altitude, focal_px=focal_px,
                 scale_range=opts["scale_range"], angle_range=opts["angle_range"],
-                mosaic=not opts["no_mosaic"], progress=not quiet and _stderr_is_terminal())
+                mosaic=not opts["no_mosaic"], progress=not quiet and _stderr_is_terminal(),
+                **_bits(opts["bit_depth"]))
     unit = "m" if (mpp is not None or altitude is not None) else "px"
     return report(_odometry_result(paths), time.perf_counter() - t0, unit, as_json)
 

@@ -510,7 +510,8 @@ def find_curves(image, width, *, width_range=(0.5, 1.5), polarity="bright",
     min_len = (_MIN_PIECES * length if min_length is None
                else number("min_length", min_length, lo=0.0))
     cfg = config or Config()
-    gray = to_gray(image, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
+    gray = to_gray(image, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb,
+                   bit_depth=cfg.bit_depth)
     # a step searches a small region: its few peaks need fewer candidates
     step_cfg = cfg.replace(n_candidates=min(cfg.n_candidates, _STEP_CANDIDATES))
     curves: list[Curve] = []

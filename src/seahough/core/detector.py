@@ -206,7 +206,8 @@ class Detector:
         t0 = time.perf_counter()
         if self.parts:
             return self._search_parts(image, features, t0)
-        gray = to_image(image, cfg.colour, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
+        gray = to_image(image, cfg.colour, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb,
+                        bit_depth=cfg.bit_depth)
         if self._grey is not None and gray.ndim == 2:
             return self._grey._search_in_grey(gray, features, t0)
         return self._search_pattern(gray, features, t0)
@@ -357,7 +358,8 @@ class Detector:
             label = str(image)
             image = read_image(image, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
         images = {c: to_image(image, c, name=label, max_pixels=cfg.max_pixels,
-                              max_memory_mb=cfg.max_memory_mb) for c in kinds}
+                              max_memory_mb=cfg.max_memory_mb, bit_depth=cfg.bit_depth)
+                  for c in kinds}
         # each pattern, and the image it is searched in (a grey image has no colour
         # to see: a painted pattern's grey edges then, as searched alone)
         work = {}

@@ -257,12 +257,13 @@ def _opencv_turns_tiff() -> bool:
 
 def to_gray(image, *, name: str = "image", max_pixels: int = 200_000_000,
             min_side: int = MIN_SIDE, max_memory_mb: float = MAX_MEMORY_MB,
-            orientation: str = "exif") -> np.ndarray:
+            orientation: str = "exif", bit_depth: int | None = None) -> np.ndarray:
     """A path or array as a float32 grey image with grey levels in [0, 255].
 
     Accepts grey (HxW or HxWx1), BGR or BGRA arrays of dtype uint8, uint16,
-    other integers, bool or float. uint16 is divided by 257 (by 4095 / 255
-    when no value exceeds 4095: 12-bit data, :data:`TWELVE_BIT`); floats whose
+    other integers, bool or float. uint16 is divided by 257 (``bit_depth``:
+    by ``(2**bit_depth - 1) / 255``, a camera's fewer bits in 16-bit files,
+    then clipped to 255); floats whose
     maximum is at most 1 are taken as [0, 1] and multiplied by 255. A path
     is read by :func:`read_image` (with ``max_pixels``, ``max_memory_mb``
     and ``orientation``).
@@ -280,12 +281,14 @@ def to_gray(image, *, name: str = "image", max_pixels: int = 200_000_000,
     >>> bool(np.shares_memory(v, g)), v.flags.writeable
     (True, False)
     """
-    return _grey(_levels(image, name, max_pixels, min_side, max_memory_mb, orientation))
+    return _grey(_levels(image, name, max_pixels, min_side, max_memory_mb, orientation,
+                         bit_depth))
 
 
 def to_image(image, colour: bool = False, *, name: str = "image",
              max_pixels: int = 200_000_000, min_side: int = MIN_SIDE,
-             max_memory_mb: float = MAX_MEMORY_MB, orientation: str = "exif") -> np.ndarray:
+             max_memory_mb: float = MAX_MEMORY_MB, orientation: str = "exif",
+             bit_depth: int | None = None) -> np.ndarray:
     """A path or array as the working image of a search: grey, or BGR when
     ``colour`` is True and the image has colour (``Config.colour``).
 
@@ -304,7 +307,7 @@ def to_image(image, colour: bool = False, *, name: str = "image",
     >>> to_image(np.full((10, 12, 3), 9, np.uint8), colour=True).shape   # no colour in it
     (10, 12)
     """
-    a = _levels(image, name, max_pixels, min_side, max_memory_mb, orientation)
+    a = _levels(image, name, max_pixels, min_side, max_memory_mb, orientation, bit_depth)
     if not colour or a.ndim == 2:
         return _grey(a)
     a = a[:, :, :3]
@@ -313,7 +316,8 @@ def to_image(image, colour: bool = False, *, name: str = "image",
     return np.ascontiguousarray(a, dtype=np.float32)
 
 
-def _levels(image, label, max_pixels, min_side, max_memory_mb, orientation) -> np.ndarray:
+def _levels(image, label, max_pixels, min_side, max_memory_mb, orientation,
+            bit_depth=None) -> np.ndarray:
     """:func:`to_gray`'s checks and levels, before the colours are mixed:
     HxW, HxWx3 or HxWx4, uint8 or float32 in [0, 255]."""
     if isinstance(image, (str, os.PathLike)):
@@ -356,31 +360,24 @@ def _levels(image, label, max_pixels, min_side, max_memory_mb, orientation) -> n
         if a.max(initial=0) <= 1.0 and a.min(initial=0) >= 0.0:
             a *= 255.0
     elif a.dtype == np.uint16:
-        div = uint16_divisor(a)
         a = a.astype(np.float32)
-        a /= div
+        a /= uint16_divisor(bit_depth)
+        if bit_depth is not None:     # (values beyond the stated depth)
+            np.minimum(a, 255.0, out=a)
     elif a.dtype != np.uint8:
         a = a.astype(np.float32)
     return a
 
 
-#: A 16-bit image none of whose values exceeds this is taken as 12-bit data
-#: (machine-vision and vehicle cameras store their 10- or 12-bit samples in
-#: 16-bit files): divided by 4095 / 255, not 65535 / 255, so that its edges
-#: have the contrast of the 8-bit image (a 12-bit frame read as 16-bit data
-#: is 16 times darker: its edges fall under ``Config.min_gradient``).
-TWELVE_BIT = 4095
+def uint16_divisor(bit_depth: int | None = None) -> float:
+    """What a uint16 image is divided by to give levels 0-255: 257 (16-bit
+    data), or ``(2**bit_depth - 1) / 255`` for a camera's ``bit_depth``-bit
+    samples in 16-bit files (:attr:`seahough.Config.bit_depth`).
 
-
-def uint16_divisor(a: np.ndarray) -> float:
-    """What a uint16 image is divided by to give levels 0-255: 4095 / 255 when
-    no value exceeds :data:`TWELVE_BIT` (12-bit data), else 257 (16-bit).
-
-    >>> uint16_divisor(np.array([0, 4095], np.uint16)) * 255 / 4095, uint16_divisor(
-    ...     np.array([0, 4096], np.uint16))
-    (1.0, 257.0)
+    >>> uint16_divisor(), uint16_divisor(12) * 255
+    (257.0, 4095.0)
     """
-    return 4095.0 / 255.0 if int(a.max(initial=0)) <= TWELVE_BIT else 257.0
+    return 257.0 if bit_depth is None else (2.0 ** int(bit_depth) - 1.0) / 255.0
 
 
 def _grey(a: np.ndarray) -> np.ndarray:
@@ -391,12 +388,12 @@ def _grey(a: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(a, dtype=np.float32)
 
 
-def to_bgr8(image) -> np.ndarray:
+def to_bgr8(image, bit_depth: int | None = None) -> np.ndarray:
     """An image array as 8-bit BGR, for writing and drawing.
 
     Grey (HxW or HxWx1), BGR and BGRA arrays are accepted. uint8 is kept
-    as it is; uint16 is divided by 257 (or as 12-bit data, :func:`uint16_divisor`);
-    floats whose maximum is at most 1 are
+    as it is; uint16 is divided by 257 (or as ``bit_depth``-bit data,
+    :func:`uint16_divisor`); floats whose maximum is at most 1 are
     taken as [0, 1] and multiplied by 255, other floats and integers are
     clipped to [0, 255] (NaN becomes 0).
 
@@ -413,7 +410,8 @@ def to_bgr8(image) -> np.ndarray:
     if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[2] not in (3, 4)):
         raise ImageValueError(f"expected a grey, BGR or BGRA image, got an array of shape {a.shape}")
     if a.dtype == np.uint16:
-        a = a.astype(np.float32) / uint16_divisor(a)
+        # (straight to 8 bits: a dark 16-bit image is not taken for [0, 1] floats)
+        a = np.minimum(a.astype(np.float32) / uint16_divisor(bit_depth), 255.0).astype(np.uint8)
     if a.dtype != np.uint8:
         a = a.astype(np.float32)
         if a.size and np.nanmax(a) <= 1.0:

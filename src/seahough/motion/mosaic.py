@@ -30,7 +30,7 @@ def _posed(csv_path, counts: dict | None = None):
 
 
 def build_mosaic(csv_path, reader: FrameReader, shape, path: Path, max_side: int = 4000, *,
-                 counts: dict | None = None):
+                 counts: dict | None = None, bit_depth: int | None = None):
     """Frames placed by the trajectory on one canvas (frame-0 pixels).
 
     Each canvas pixel comes from the frame that saw it nearest to that
@@ -72,7 +72,7 @@ def build_mosaic(csv_path, reader: FrameReader, shape, path: Path, max_side: int
     dist = (((xx - c[0]) / w) ** 2 + ((yy - c[1]) / h) ** 2).astype(np.float32) + 1.0  # >= 1
     for index, inv in _posed(csv_path):
         try:
-            img = to_bgr8(reader.raw(index))
+            img = to_bgr8(reader.raw(index), bit_depth)
         except (ImageError, OSError):
             img = None
         if img is None or img.shape[:2] != (h, w):

@@ -265,7 +265,8 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
             return None
         if i not in frames_mem:
             gray_i = to_gray((reader if ahead is None else ahead).raw(i),
-                             max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
+                             max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb,
+                             bit_depth=cfg.bit_depth)
             frames_mem[i] = Frame(i, searcher.crop(gray_i))
         return frames_mem[i]
 
@@ -291,7 +292,7 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
                                  else np.asarray(r["matrix"], float).reshape(2, 3))
                     if r["status"] != "unreadable" and st.shape is None:
                         g0 = to_gray(reader.raw(r["index"]), max_pixels=cfg.max_pixels,
-                         max_memory_mb=cfg.max_memory_mb)
+                                     max_memory_mb=cfg.max_memory_mb, bit_depth=cfg.bit_depth)
                         st.shape, st.box = g0.shape, content_box(g0)
                     if mpp:
                         r["x_m"], r["y_m"] = metric_position(r, st.shape, mpp)
@@ -336,7 +337,7 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
         bar = tqdm(total=len(items), initial=n_resumed, file=sys.stderr, unit="frame",
                    desc="odometry", dynamic_ncols=True, disable=None, leave=False)
     ahead = Prefetch(reader, n_resumed, max_pixels=cfg.max_pixels,
-                     max_memory_mb=cfg.max_memory_mb, workers=workers)
+                     max_memory_mb=cfg.max_memory_mb, workers=workers, bit_depth=cfg.bit_depth)
     if searcher is not None:
         ahead.use(searcher, st.shape)
     try:
@@ -397,7 +398,8 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
         if not (mosaic and st.shape is not None):
             return None
         return write_output(out / "mosaic.png", lambda: build_mosaic(
-            csv_path, reader, st.shape, out / "mosaic.png", counts=placed))
+            csv_path, reader, st.shape, out / "mosaic.png", counts=placed,
+            bit_depth=cfg.bit_depth))
 
     def draw_track():
         return write_output(out / "trajectory.png", lambda: plot_track(

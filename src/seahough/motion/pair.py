@@ -221,9 +221,9 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
     _check_thresholds(max_shift, min_confidence, min_score)
     max_nfa = check_max_nfa(max_nfa)
     prev = to_gray(previous, name="previous frame", max_pixels=cfg.max_pixels,
-                   max_memory_mb=cfg.max_memory_mb)
+                   max_memory_mb=cfg.max_memory_mb, bit_depth=cfg.bit_depth)
     cur = to_gray(current, name="current frame", max_pixels=cfg.max_pixels,
-                   max_memory_mb=cfg.max_memory_mb)
+                   max_memory_mb=cfg.max_memory_mb, bit_depth=cfg.bit_depth)
     if prev.shape != cur.shape:
         raise ParameterError(f"frames differ in size: previous {prev.shape[1]}x{prev.shape[0]}, "
                              f"current {cur.shape[1]}x{cur.shape[0]}")
@@ -535,7 +535,7 @@ def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
     _check_thresholds(max_shift, min_confidence, min_score)
     max_nfa = check_max_nfa(max_nfa)
     cur = to_gray(current, name="current frame", max_pixels=cfg.max_pixels,
-                   max_memory_mb=cfg.max_memory_mb)
+                   max_memory_mb=cfg.max_memory_mb, bit_depth=cfg.bit_depth)
     h, w = cur.shape
     ph, pw = pattern.image.shape
     if (ph, pw) != (h, w):

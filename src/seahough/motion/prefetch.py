@@ -58,14 +58,16 @@ class Prepared:
     features: Features | None = None
 
 
-def read_frame(reader: FrameReader, i: int, max_pixels: int, max_memory_mb: float) -> Prepared:
+def read_frame(reader: FrameReader, i: int, max_pixels: int, max_memory_mb: float,
+               bit_depth: int | None = None) -> Prepared:
     """Frame ``i`` read, its fingerprint (``--resume``) and grey image, or
     why it cannot be measured (unreadable, too small)."""
     frame_hash = None
     try:
         raw = reader.raw(i)
         frame_hash = reader.fingerprint(i, raw)
-        gray = to_gray(raw, max_pixels=max_pixels, max_memory_mb=max_memory_mb)
+        gray = to_gray(raw, max_pixels=max_pixels, max_memory_mb=max_memory_mb,
+                       bit_depth=bit_depth)
         del raw
         check_motion_size(gray.shape, "frame")
     except (ImageError, OSError) as e:
@@ -98,9 +100,9 @@ class Prefetch:
     """
 
     def __init__(self, reader: FrameReader, start: int, *, max_pixels: int,
-                 max_memory_mb: float, workers: int = 1):
+                 max_memory_mb: float, workers: int = 1, bit_depth: int | None = None):
         self.reader = reader
-        self.limits = (max_pixels, max_memory_mb)
+        self.limits = (max_pixels, max_memory_mb, bit_depth)
         self.searcher = None
         self.shape = None
         self._next = start                 # the next index to submit

@@ -24,6 +24,7 @@ import stat
 from dataclasses import asdict
 from pathlib import Path
 
+from ..config import config_record
 from ..errors import ParameterError, SeahoughError, WriteError
 from ..io.frames import split_video_ref, printable
 
@@ -57,11 +58,12 @@ def run_settings(scale_range, angle_range, metres_per_pixel, config, tuning) -> 
     >>> s["scale_range"], s["angle_range"], s["metres_per_pixel"], s["format"]
     ([0.9, 1.1], [-20.0, 20.0], None, 2)
     """
+    cfg = config_record(config)
     return {"format": SETTINGS_FORMAT,
             "scale_range": [float(v) for v in scale_range],
             "angle_range": [float(v) for v in angle_range],
             "metres_per_pixel": None if metres_per_pixel is None else float(metres_per_pixel),
-            "config": asdict(config), "tuning": asdict(tuning)}
+            "config": cfg, "tuning": asdict(tuning)}
 
 
 def settings_hash(settings: dict) -> str:

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ImageError, SeahoughError
+from ..errors import ImageError, PatternError, SeahoughError
 from ..geometry import compose, invert_matrix, matrix_power, nearest_similarity
 from ..motion.pair import estimate_motion
 from ..motion.track import iter_odometry_csv, pose_columns, row_to_csv
@@ -230,6 +230,8 @@ def measure_across(reader, p: int, q: int, scale_range, angle_range, config, tun
             loose = estimate_motion(reader.raw(p), reader.raw(q), sr, ar, min_confidence=0.0,
                                     **kw)
             return None, "no_match" if loose is None else "low_confidence"
+    except PatternError:   # (the earlier frame has too few edges to be searched for)
+        return None, "few_edges"
     except (SeahoughError, OSError):
         return None, "no_match"
     if mo.overlap < tuning.min_overlap:

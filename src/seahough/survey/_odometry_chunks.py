@@ -149,7 +149,8 @@ def _origin_shape(folder: Path, items, config):
         for row in iter_odometry_csv(folder / "odometry.csv"):
             if row["status"] != "unreadable":
                 return to_gray(reader.raw(row["index"]), max_pixels=config.max_pixels,
-                               max_memory_mb=config.max_memory_mb).shape
+                               max_memory_mb=config.max_memory_mb,
+                               bit_depth=config.bit_depth).shape
     except (ImageError, OSError):
         return None
     finally:
@@ -203,7 +204,8 @@ def _shape_of(reader: FrameReader, i: int, config):
     """(h, w) of frame ``i``, or None when it cannot be read."""
     try:
         return tuple(to_gray(reader.raw(i), max_pixels=config.max_pixels,
-                             max_memory_mb=config.max_memory_mb).shape)
+                             max_memory_mb=config.max_memory_mb,
+                             bit_depth=config.bit_depth).shape)
     except (ImageError, OSError):
         return None
 

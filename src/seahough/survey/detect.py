@@ -23,10 +23,11 @@ import math
 import os
 import sys
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 
 from .._validate import number
+from ..config import config_record
 from ..core.detector import Detector
 from ..core.pattern import Pattern
 from ..core.preprocess import choose_factor
@@ -101,7 +102,7 @@ def detector_settings(detector: Detector) -> dict:
     """
     if detector.parts:   # several patterns: each one's own settings
         return {"patterns": {name: detector_settings(d) for name, d in detector.parts.items()},
-                "config": asdict(detector.config)}
+                "config": config_record(detector.config)}
     p = detector.pattern
     sr = detector.search_region
     return {"pattern": {"kind": p.kind, "size": list(p.image.shape[::-1]),
@@ -114,7 +115,7 @@ def detector_settings(detector: Detector) -> dict:
             # (no limit as "inf": JSON has no infinity)
             "max_nfa": detector.max_nfa if math.isfinite(detector.max_nfa) else "inf",
             "search_region": None if sr is None else list(sr),
-            "config": asdict(detector.config)}
+            "config": config_record(detector.config)}
 
 
 def _as_detector(pattern, options: dict) -> Detector:

@@ -303,7 +303,8 @@ def _chain_and_write(run: RunFolder, reader, items, results, columns, digest, mp
     placed: dict = {}
     if mosaic and shape is not None:
         made = write_output(out / "mosaic.png", lambda: build_mosaic(
-            run.csv, reader, shape, out / "mosaic.png", counts=placed))
+            run.csv, reader, shape, out / "mosaic.png", counts=placed,
+            bit_depth=cfg.bit_depth))
         if made is not None:
             paths["mosaic"] = Path(made)
     paths["trajectory"] = Path(write_output(out / "trajectory.png", lambda: plot_track(
