@@ -72,8 +72,8 @@ def jpeg(img: np.ndarray, quality: int) -> np.ndarray:
 
 
 def dark(img: np.ndarray, gain: float, seed: int) -> np.ndarray:
-    """A quarter of the light: levels times ``gain``, then the sensor's noise
-    (sigma 2 levels) and 8-bit rounding."""
+    """A quarter of the light: levels times ``gain`` (truncated to whole
+    levels), then the sensor's noise (sigma 2 levels)."""
     return noise((img.astype(np.float32) * gain).astype(np.uint8), 2.0, seed)
 
 

@@ -18,7 +18,7 @@ which every frame becomes the keyframe of the next) and reports:
 
 Nothing is tuned here: both settings exist; the page says what each costs.
 
-    python bench/bench_keyframes.py            # (~4 min: the references' feature fits)
+    python bench/bench_keyframes.py            # (~5 min: the references' feature fits)
     python bench/bench_keyframes.py --quick    # Sparus and one simulated run
 """
 

@@ -662,7 +662,9 @@ def test_demo_end_to_end(tmp_path):
     assert "drift" in proc.stdout
     # without --quiet, the list of pictures names every file written (and the frames' range)
     proc = run("demo", "--out", tmp_path / "demo2", timeout=120)
-    listed = proc.stdout.split("pictures in ", 1)[1].split("\n", 1)[0]
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    listed = proc.stdout.split("pictures in ", 1)[1].split("\n", 1)[0].split(": ", 1)[1]
+    listed = set(listed.split(", "))
     for name in want:
         if not name.startswith("sequence/"):
             assert name in listed, name

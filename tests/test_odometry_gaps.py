@@ -3,7 +3,7 @@
 A pair that the keyframe, the full search and the previous frame cannot
 measure gets a last, wider try (``wide``); a pair that still cannot be
 measured is flagged with what happened (``no_match``, ``low_confidence``,
-``little_overlap``) and its pose carries the last velocity on (``pose_assumed:
+``little_overlap``, ``few_edges``) and its pose carries the last velocity on (``pose_assumed:
 constant velocity since frame N``), never zero motion once a motion is known;
 the mosaic leaves assumed poses out and says so; a resumed run stays exact.
 """
