@@ -267,6 +267,27 @@ def test_bit_depth_option_reads_twelve_bit_files(tmp_path):
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
+def test_the_accumulator_picture_of_several_patterns_is_the_found_ones(tmp_path, monkeypatch):
+    """With several patterns, the accumulator picture shows the planes of the
+    pattern of the best detection (not always the first pattern's)."""
+    from seahough import viz
+    from seahough.cli import detect as D
+    from seahough.cli._common import make_detector
+
+    img, _ = sim.rope_scene(width=8, water="moderate", seed=5, source="procedural")
+    det = make_detector("buoy=circle:16+rope=line:200,8", (0.5, 2.0), (0.0, 180.0), 1, 0.5,
+                        0.0, None, None, False, None, None)
+    res = det.search(img)
+    assert [d.pattern for d in res.detections] == ["rope"]
+    seen = {}
+    monkeypatch.setattr(viz, "plot_accumulator",
+                        lambda planes, dets, path, title, note: seen.update(
+                            planes=planes, dets=dets, title=title))
+    D._pictures("rope.png", img, res, det, None, tmp_path / "rope", None, {})
+    assert seen["planes"] is res.parts["rope"].planes and seen["planes"] is not res.planes
+    assert seen["title"].endswith("of pattern rope") and len(seen["dets"]) == 1
+
+
 def test_detect_out_writes_pngs(scenes, tmp_path):
     d, _ = scenes
     from seahough.viz import detections_size

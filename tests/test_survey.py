@@ -340,6 +340,8 @@ def test_cli_detect(scenes, cluster, tmp_path, capsys):
     (["{imgs}", "--scale-range", "2", "1"], "LOW must not exceed HIGH"),
     (["{imgs}", "--workers", "0"], "--workers"),
     (["{imgs}", "--out", "{tmp}/f/o"], "cannot create the output folder"),
+    # a typo on the command line: nothing started, nothing written
+    (["{imgs}", "{tmp}/nosuchdir"], "nosuchdir: no such file or folder"),
 ])
 def test_cli_bad_input_one_line(scenes, tmp_path, capsys, args, message):
     (tmp_path / "empty").mkdir()
@@ -349,6 +351,8 @@ def test_cli_bad_input_one_line(scenes, tmp_path, capsys, args, message):
         args += ["--out", str(tmp_path / "o")]
     code, out, err = _cli(capsys, "detect", scenes / "pattern.png", *args)
     assert code == 2 and err.count("\n") == 1 and message in err, err
+    if "nosuchdir" in message:
+        assert not (tmp_path / "o").exists()
 
 
 def test_cli_scheduler_nothing_listens(scenes, tmp_path, capsys, monkeypatch):

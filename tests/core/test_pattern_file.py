@@ -56,6 +56,13 @@ def test_bad_pattern_files_say_what_is_wrong(tmp_path):
     (tmp_path / "junk.npz").write_bytes(b"not a zip")
     with pytest.raises(seahough.PatternError, match="junk.npz: not a saved seahough pattern"):
         seahough.Pattern.load(tmp_path / "junk.npz")
+    # an image given to load: what to call instead, not numpy's words about pickles
+    import cv2
+    cv2.imwrite(str(tmp_path / "buoy.png"), np.zeros((20, 20), np.uint8))
+    with pytest.raises(seahough.PatternError, match="not an .npz archive.*Pattern.from_image") \
+            as info:
+        seahough.Pattern.load(tmp_path / "buoy.png")
+    assert "pickle" not in str(info.value)
     np.savez(tmp_path / "other.npz", x=np.zeros(3))
     with pytest.raises(seahough.PatternError, match="other.npz: not a saved seahough pattern"):
         seahough.Pattern.load(tmp_path / "other.npz")

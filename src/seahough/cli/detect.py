@@ -162,13 +162,16 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, max_widt
         return
     plot.plot_detections(img, dets, ov, pattern=pat, title=head, max_width=max_width)
     written["overlay"] = str(ov)
-    acc_dets, acc_title = dets, f"{Path(name).name}: accumulator"
-    if detector.parts:   # the planes are the first pattern's: its detections only
-        first = next(iter(detector.parts))
-        acc_dets = [d for d in dets if d.pattern == first]
-        acc_title += f" of pattern {first}"
+    planes, acc_dets, acc_title = res.planes, dets, f"{Path(name).name}: accumulator"
+    if detector.parts:   # one pattern's planes: the best detection's (else the first's)
+        which = dets[0].pattern if dets else next(iter(detector.parts))
+        part = res.parts.get(which) if res.parts else None
+        if part is not None:
+            planes = part.planes
+        acc_dets = [d for d in dets if d.pattern == which]
+        acc_title += f" of pattern {which}"
     ac = Path(f"{base}_accumulator.png")
-    plot.plot_accumulator(res.planes, acc_dets, ac, title=acc_title, note=res.note)
+    plot.plot_accumulator(planes, acc_dets, ac, title=acc_title, note=res.note)
     written["accumulator"] = str(ac)
     ed = Path(f"{base}_edges.png")
     plot.plot_edges(img, res.features, ed, title=f"{Path(name).name}: what the detector sees")

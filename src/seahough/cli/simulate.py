@@ -50,6 +50,7 @@ def simulate(kind, out, count, seed, water, marker_name, size, path_kind, proced
                              procedural=procedural, progress=not quiet)
     n_files = len(truth.get("frames", truth.get("scenes", [])))
     what = "frames" if kind == "sequence" else ("pairs" if kind == "pair" else "scenes")
+    what = what[:-1] if n_files == 1 else what
     click.echo(f"wrote {n_files} {what} and {o / 'truth.json'}")
     if quiet:
         return 0

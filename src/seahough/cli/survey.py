@@ -18,7 +18,7 @@ from types import SimpleNamespace
 import click
 
 from ..io.frames import printable
-from ._common import _dumps, _stderr_is_terminal, make_detector, workers_option
+from ._common import _Fail, _dumps, _stderr_is_terminal, make_detector, workers_option
 
 __all__ = ["survey"]
 
@@ -85,8 +85,10 @@ def detect(pattern, inputs, out, workers, scheduler, batch_size, as_json, quiet,
     \b
     INPUT is an image file, a folder (its images, in name order, or in the
     order of the timestamps in their names), or @LIST.txt: a file of paths,
-    one a line (a shell cannot pass 100,000 names). PATTERN and the search
-    options are those of `seahough detect`.
+    one a line (a shell cannot pass 100,000 names); a file or folder given
+    here that does not exist is bad input (exit 2), one listed in @LIST.txt
+    gets an error row. PATTERN and the search options are those of
+    `seahough detect`, but for curve:WIDTH (found by `seahough detect`).
 
     \b
     Writes to --out:
@@ -120,6 +122,11 @@ def detect(pattern, inputs, out, workers, scheduler, batch_size, as_json, quiet,
         raise click.BadParameter(f"{pattern!r}: curves are found by 'seahough detect', not "
                                  "by a survey", param_hint="PATTERN")
     detector = make_detector(pattern, **search)
+    # a path typed on the command line that is not there is a typo, not a photo
+    # that failed: nothing is started (paths in @LIST files get error rows)
+    for item in inputs:
+        if not item.startswith("@") and not Path(item).exists():
+            raise _Fail(f"{printable(item)}: no such file or folder")
     result = run_survey(detector, list(inputs), out, workers=workers, scheduler=scheduler,
                         batch_size=batch_size, progress=not quiet and _stderr_is_terminal())
     errors = _errors(result.images, SHOW_ERRORS) if result.errors else []
@@ -188,7 +195,7 @@ def _odometry_result(paths: dict):
 @click.option("--out", "-o", required=True, type=click.Path(file_okay=False),
               help="Folder for the CSV/JSON track, the mosaic and the trajectory plot.")
 @_cluster_options
-@click.option("--chunk-size", type=click.IntRange(min=2), default=200, show_default=True,
+@click.option("--chunk-size", type=click.IntRange(min=6), default=200, show_default=True,
               metavar="N", help="Frames per chunk measured in parallel (each with its own "
               "keyframes), chained after.")
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON object.")

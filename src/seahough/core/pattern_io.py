@@ -69,7 +69,11 @@ def load(cls, path, config: Config | None = None):
     except IsADirectoryError:
         raise ImageReadError(f"{path}: is a folder") from None
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as e:
-        raise PatternError(f"{bad} ({e})") from None
+        # (numpy says "pickled data ... allow_pickle" of any file that is not an
+        # .npy or .npz archive, e.g. an image: not what the user needs to read)
+        why = "not an .npz archive" if "pickle" in str(e) else e
+        raise PatternError(f"{bad} ({why}; Pattern.load reads what Pattern.save wrote, "
+                           f"Pattern.from_image reads an image)") from None
     if not isinstance(z, np.lib.npyio.NpzFile):
         raise PatternError(f"{bad} (a single array, not a .npz archive)")
     try:
