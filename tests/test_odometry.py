@@ -625,6 +625,55 @@ def test_killed_run_resumes_to_the_same_result(tmp_path):
     assert _csv_without_timing(res.csv_path) == _csv_without_timing(full.csv_path)
 
 
+_TERM_SCRIPT = """
+import sys, time
+from seahough.io.frames import FrameReader
+raw = FrameReader.raw
+def slow(self, i):
+    time.sleep(0.15)
+    return raw(self, i)
+FrameReader.raw = slow
+from seahough.cli import main
+main(["odometry", sys.argv[1], "--out", sys.argv[2], "--no-mosaic", "--quiet", "-j", "1"])
+"""
+
+
+def test_sigterm_stops_the_command_like_ctrl_c_and_the_run_resumes(tmp_path):
+    """``kill`` (SIGTERM: a batch system's time limit, ``docker stop``) stops
+    ``seahough odometry`` as Ctrl-C does: one line, exit 143, the rows done are
+    kept, and --resume finishes the run as an uninterrupted one."""
+    frames, _ = _sequence("line", n=14, seed=9)
+    folder = tmp_path / "frames"
+    _write_frames(frames, folder)
+    full = run_odometry(folder, tmp_path / "full", progress=False, mosaic=False)
+    out = tmp_path / "term"
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")]))
+    proc = subprocess.Popen([sys.executable, "-c", _TERM_SCRIPT, str(folder), str(out)], env=env,
+                            stderr=subprocess.PIPE, text=True)
+    csv_path = out / "odometry.csv"
+    try:
+        deadline = time.time() + 60
+        while time.time() < deadline:
+            if csv_path.exists() and len(csv_path.read_text().splitlines()) >= 6:
+                break
+            if proc.poll() is not None:
+                break
+            time.sleep(0.02)
+        assert proc.poll() is None, "the run ended before it could be stopped"
+        os.kill(proc.pid, signal.SIGTERM)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 143, err
+    assert err.count("\n") == 1 and "terminated (SIGTERM)" in err and "Traceback" not in err
+    done = read_odometry_csv(csv_path)
+    assert 5 <= len(done) < 14
+    res = run_odometry(folder, out, resume=True, progress=False, mosaic=False)
+    assert res.summary["resumed_rows"] == len(done)
+    assert _csv_without_timing(res.csv_path) == _csv_without_timing(full.csv_path)
+
+
 # ---------------------------------------------------------------- real sequences
 @pytest.fixture(scope="module")
 def real_runs(tmp_path_factory):

@@ -16,7 +16,9 @@ from __future__ import annotations
 
 import importlib
 import os
+import signal
 import sys
+import threading
 
 import click
 
@@ -133,12 +135,35 @@ def _interrupted(exc: BaseException) -> bool:
     return False
 
 
+class _Terminated(BaseException):
+    """SIGTERM (``kill``, a batch system's time limit, ``docker stop``),
+    raised where Ctrl-C would be: what Ctrl-C keeps is kept (the work's
+    ``finally`` clauses run; a BaseException, not a KeyboardInterrupt, so
+    that click does not take it for a Ctrl-C at a prompt)."""
+
+
+def _on_sigterm(signum, frame):
+    raise _Terminated()
+
+
+def _catch_sigterm():
+    """Install :func:`_on_sigterm` (main thread only); returns the old handler
+    (None: not installed)."""
+    if threading.current_thread() is not threading.main_thread():
+        return None
+    try:
+        return signal.signal(signal.SIGTERM, _on_sigterm)
+    except (ValueError, OSError):   # pragma: no cover  (no signals here)
+        return None
+
+
 def main(argv=None) -> None:
     """Entry point of the ``seahough`` command (and ``python -m seahough``).
 
     Runs the command line ``argv`` (default: ``sys.argv[1:]``) and exits
     with its status (``SystemExit``): 0 success, 1 not found or flagged,
-    2 bad input (one line on stderr), 130 interrupted.
+    2 bad input (one line on stderr), 130 interrupted (Ctrl-C), 143
+    terminated (SIGTERM: handled as Ctrl-C is, what was done is kept).
 
     Examples
     --------
@@ -148,6 +173,17 @@ def main(argv=None) -> None:
     ...     print("exit status", e.code)
     exit status 2
     """
+    old = _catch_sigterm()
+    try:
+        rv = _run(argv)
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGTERM, old)
+    sys.exit(rv)
+
+
+def _run(argv) -> int:
+    """The command line's exit status (:func:`main`)."""
     try:
         rv = cli.main(args=argv, prog_name=PROG, standalone_mode=False)
     except click.exceptions.NoArgsIsHelpError as e:
@@ -160,6 +196,10 @@ def main(argv=None) -> None:
             msg += f" (see '{ctx.command_path} --help')"
         _err(msg)
         rv = e.exit_code
+    except _Terminated:
+        _err("terminated (SIGTERM); what was done is kept: run the same command to "
+             "continue (odometry: with --resume)")
+        rv = 143
     except (click.exceptions.Abort, KeyboardInterrupt):
         _err("interrupted")
         rv = 130
@@ -187,7 +227,7 @@ def main(argv=None) -> None:
         where = f"{e.filename}: " if getattr(e, "filename", None) else ""
         _err(f"{where}{e.strerror or e}")
         rv = 2
-    sys.exit(rv if isinstance(rv, int) else 0)
+    return rv if isinstance(rv, int) else 0
 
 
 if __name__ == "__main__":  # pragma: no cover
