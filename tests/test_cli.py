@@ -455,6 +455,11 @@ def test_simulate_writes_scenes_and_truth(tmp_path, kind):
         assert {"line_angle", "line_offset"} <= set(items[0])
     if kind == "pair":
         assert np.asarray(items[0]["motion"]).shape == (2, 3)
+        # the turn as estimate_motion reports it, in [-180, 180)
+        m = seahough.estimate_motion(tmp_path / items[0]["previous"],
+                                     tmp_path / items[0]["current"])
+        assert -180 <= items[0]["angle"] < 180 and m.angle == pytest.approx(items[0]["angle"],
+                                                                               abs=0.5)
     if kind == "sequence":
         assert np.allclose(items[0]["matrix_from_first"], [[1, 0, 0], [0, 1, 0]])
         assert "motion_from_previous" in items[1]

@@ -17,7 +17,7 @@ import numpy as np
 
 from .._validate import number
 from ..errors import ParameterError, WriteError
-from ..geometry import apply_matrix, compose, invert_matrix
+from ..geometry import apply_matrix, compose, invert_matrix, wrap_angle
 from ..io.images import write_image
 from .markers import MARKERS, marker
 from .scenes import frame_pair, marker_scene, negative_scene, rope_scene
@@ -35,7 +35,8 @@ WATERS: tuple[str, ...] = (*PRESETS, "none")
 PATHS: tuple[str, ...] = ("line", "turn", "loop")
 
 _CONVENTION = ("pixels (x right, y down), (0, 0) = centre of the top-left pixel; angles in "
-               "degrees counter-clockwise as displayed; matrices are 2x3, pattern (or "
+               "degrees counter-clockwise as displayed, a pose's in [0, 360) as Detection.angle, "
+               "a pair's turn in [-180, 180) as Motion.angle; matrices are 2x3, pattern (or "
                "previous-frame) pixel -> scene pixel")
 
 
@@ -223,6 +224,9 @@ def _simulate_into(kind, out: Path, truth: dict, count: int, bar, *, seed, water
             na, nb = f"pair_{i:03d}_a.png", f"pair_{i:03d}_b.png"
             write_image(out / na, a)
             write_image(out / nb, b)
-            scenes.append({"previous": na, "current": nb, "seed": s, **_truth_dict(tr)})
+            rec = _truth_dict(tr)
+            if "angle" in rec:   # (as estimate_motion reports a turn: [-180, 180))
+                rec["angle"] = wrap_angle(rec["angle"], low=-180.0)
+            scenes.append({"previous": na, "current": nb, "seed": s, **rec})
         tick()
     truth["scenes"] = scenes
