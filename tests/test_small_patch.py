@@ -58,3 +58,7 @@ def test_only_small_texture_patterns_take_more_key_points():
     shape = seahough.Detector(seahough.Pattern.rectangle(40, 24), scale_range=(0.85, 1.15))
     assert shape._n_keypoints(frame, 0.25) is None
     assert seahough.Detector(seahough.Pattern.from_frame(patch))._n_keypoints(frame, 0.25) is None
+    # a number of key points the user chose is kept (CLI --keypoints)
+    mine = seahough.Detector(seahough.Pattern(patch), scale_range=(0.85, 1.15),
+                             config=seahough.Config(n_keypoints=300))
+    assert mine._n_keypoints(frame, 0.25) is None

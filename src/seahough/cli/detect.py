@@ -238,7 +238,9 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, max_width=No
 @click.option("--downscale", type=click.FloatRange(0.0, 1.0, min_open=True), default=None,
               help="Work on the image scaled by this factor (default: automatic).")
 @click.option("--keypoints", type=click.IntRange(min=1), default=None,
-              help=f"Number of most contrasted edge points kept (default {_CFG.n_keypoints}).")
+              help=f"Number of most contrasted edge points kept (default {_CFG.n_keypoints}; "
+              "without it, a pattern cut from a photo that is a small share of the image, a "
+              "seabed patch, gets as many more as put enough on its area: slower).")
 @click.option("--equalize", is_flag=True, help="Local contrast equalisation (haze, uneven light).")
 @bit_depth_option
 @click.option("--colour/--grey", "colour", default=None,

@@ -74,6 +74,10 @@ class SearchResult:
     parts: dict = field(default_factory=dict)
 
 
+#: Config's own number of key points: another one is a user's choice
+#: (:meth:`Detector._n_keypoints` keeps it).
+_DEFAULT_KEYPOINTS = Config().n_keypoints
+
 class Detector:
     """Find a pattern at unknown position, scale and rotation.
 
@@ -310,7 +314,9 @@ class Detector:
         enough for :data:`TEXTURE_DENSITY` times the pattern's own points to
         fall on its area, at most :data:`MAX_KEYPOINTS`, when the default
         would put fewer than :data:`MIN_ON_PATTERN` there (shapes keep the
-        default: their borders are among the most contrasted edges).
+        default: their borders are among the most contrasted edges). A
+        Config whose ``n_keypoints`` is not the default's is the user's
+        choice, and is kept (a texture patch found less often, faster).
         """
         cfg = self.config
         n = cfg.n_keypoints_2d
@@ -320,7 +326,7 @@ class Detector:
             return n
         p = self.pattern
         if shape is None or factor is None or p.is_frame or p.is_line or not p.is_photo \
-                or p.has_long_borders(cfg):
+                or cfg.n_keypoints != _DEFAULT_KEYPOINTS or p.has_long_borders(cfg):
             return None
         ph, pw = p.image.shape[:2]
         h, w = shape[:2]
