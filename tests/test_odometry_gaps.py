@@ -174,6 +174,18 @@ def test_frames_without_edges_are_flagged_few_edges_not_no_match(tmp_path):
     assert why[8] in ("no_match", "low_confidence"), why   # edges, but not these
 
 
+def test_a_surveys_folder_is_not_mixed_with_a_dead_reckoning(tmp_path):
+    """run_odometry into a folder of survey detect's results is refused, and
+    nothing of it is written there."""
+    from seahough.errors import ParameterError
+
+    frames, _ = _line(n=3)
+    (tmp_path / "survey.json").write_text("{}")
+    with pytest.raises(ParameterError, match="holds the results of a survey detect"):
+        run_odometry(frames, tmp_path, progress=False, mosaic=False)
+    assert not (tmp_path / "odometry.csv").exists()
+
+
 def test_the_trajectory_picture_marks_assumed_poses(tmp_path):
     frames, _ = _line()
     res = run_odometry(_with_gap(frames, 6), tmp_path, progress=False, mosaic=False)

@@ -342,10 +342,14 @@ def test_cli_detect(scenes, cluster, tmp_path, capsys):
     (["{imgs}", "--out", "{tmp}/f/o"], "cannot create the output folder"),
     # a typo on the command line: nothing started, nothing written
     (["{imgs}", "{tmp}/nosuchdir"], "nosuchdir: no such file or folder"),
+    # a dead reckoning's folder: not mixed with a survey
+    (["{imgs}", "--out", "{tmp}/odo"], "holds the results of an odometry (odometry.csv)"),
 ])
 def test_cli_bad_input_one_line(scenes, tmp_path, capsys, args, message):
     (tmp_path / "empty").mkdir()
     (tmp_path / "f").write_text("x")
+    (tmp_path / "odo").mkdir()
+    (tmp_path / "odo" / "odometry.csv").write_text("index\n")
     args = [a.format(tmp=tmp_path, imgs=scenes / "imgs") for a in args]
     if "--out" not in args:
         args += ["--out", str(tmp_path / "o")]

@@ -206,7 +206,8 @@ _SHAPE_USAGE = {"rect": "rect:W,H (e.g. rect:60,40)", "rectangle": "rect:W,H (e.
                 "polygon": "polygon:x1,y1,x2,y2,x3,y3,...",
                 "poly": "polygon:x1,y1,x2,y2,x3,y3,...",
                 "polyline": "polyline:WIDTH:x1,y1,x2,y2,... (e.g. polyline:6:0,80,0,0,60,0,60,80)",
-                "curve": "curve:WIDTH (e.g. curve:8; a bright rope, --polarity dark for a dark cable)"}
+                "curve": "curve:WIDTH (e.g. curve:8; a bright rope, --polarity dark for a "
+                         "dark cable)"}
 
 
 def bit_depth_option(f):

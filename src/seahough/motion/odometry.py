@@ -60,8 +60,8 @@ from .prefetch import Prefetch, overlapped
 from .state import Frame, State, advance, ref_cum
 from .pair import content_box
 from .searcher import WIDEN, Searcher as _Searcher
-from .runfiles import (RunFolder, check_kept_row, open_track, run_settings, settings_hash,
-                       write_output, write_row)
+from .runfiles import (RunFolder, check_kept_row, check_kind, open_track, run_settings,
+                       settings_hash, write_output, write_row)
 from .track import (CSV_BASE, CSV_CHECK, CSV_METRIC, CSV_MORE, OdometryResult, Totals,
                     closing_enumerate, plot_track, resolve_metres_per_pixel, summarise,
                     iter_odometry_csv, metric_position, pose_columns, row_to_csv)
@@ -238,6 +238,7 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     digest = settings_hash(settings)
     columns = CSV_BASE + (CSV_METRIC if mpp else []) + CSV_MORE + CSV_CHECK
     with RunFolder(out_dir) as run:
+        check_kind(run.path, "odometry")
         try:
             return _run(run, reader, items, columns, settings, digest, resume, scale_range,
                         angle_range, mpp, cfg, tuning, progress, mosaic, t_start,

@@ -122,6 +122,38 @@ def _reason(e: OSError) -> str:
     return text[:1].lower() + text[1:]
 
 
+#: What each kind of run writes that no other kind does: a folder holding
+#: one of another kind's is refused (``check_kind``).
+_KIND_FILES = {"odometry": ("odometry.csv", "run.json"),
+               "survey detect": ("survey.json", "images.parquet")}
+
+
+def check_kind(path, kind: str) -> None:
+    """ParameterError when the folder ``path`` holds another kind of run's
+    results (a dead reckoning's odometry.csv, a survey's survey.json):
+    nothing of two runs is mixed in one output folder.
+
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     _ = (pathlib.Path(d) / "survey.json").write_text("{}")
+    ...     check_kind(d, "survey detect")
+    ...     try:
+    ...         check_kind(d, "odometry")
+    ...     except ParameterError as e:
+    ...         print(str(e)[-60:])
+    ...     
+    results of a survey detect (survey.json): give another --out
+    """
+    for other, names in _KIND_FILES.items():
+        if other == kind:
+            continue
+        found = next((n for n in names if (Path(path) / n).exists()), None)
+        if found is not None:
+            article = "an" if other[0] in "aeiou" else "a"
+            raise ParameterError(f"{path}: holds the results of {article} {other} ({found}): "
+                                 "give another --out")
+
+
 class RunFolder:
     """The output folder of one run, created and locked (``fcntl.flock`` on
     ``.seahough.lock``, released when the run ends or its process dies).

@@ -46,7 +46,7 @@ except ImportError:   # (a ParameterError: one line from the CLI, as for a missi
     raise ParameterError("the survey commands need pyarrow: pip install 'seahough[survey]'") \
         from None
 from ..io.frames import printable
-from ..motion.runfiles import RunFolder, settings_changes, settings_hash
+from ..motion.runfiles import RunFolder, check_kind, settings_changes, settings_hash
 
 __all__ = ["SurveyFolder", "IMAGES_SCHEMA", "DETECTIONS_SCHEMA", "image_row", "FORMAT"]
 
@@ -152,6 +152,11 @@ class SurveyFolder:
     def __init__(self, path):
         self._run = RunFolder(path)         # creates and locks the folder
         self.path = self._run.path
+        try:
+            check_kind(self.path, "survey detect")
+        except ParameterError:
+            self._run.release()
+            raise
         self.manifest = self.path / MANIFEST
         self.images = self.path / IMAGES
         self.detections = self.path / DETECTIONS

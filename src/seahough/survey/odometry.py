@@ -33,7 +33,7 @@ from ..core.accumulator import check_ranges
 from ..errors import ParameterError, SeahoughError, WriteError
 from ..io.frames import FrameReader, list_frames
 from ..motion.mosaic import build_mosaic
-from ..motion.runfiles import (RunFolder, format_change, run_settings, settings_changes,
+from ..motion.runfiles import (RunFolder, check_kind, format_change, run_settings, settings_changes,
                                settings_hash, write_output)
 from ..motion.track import (CSV_BASE, CSV_CHECK, CSV_METRIC, CSV_MORE, Totals, plot_track,
                             resolve_metres_per_pixel, summarise)
@@ -232,6 +232,7 @@ def odometry(frames, out, *, workers=None, scheduler=None, chunk_size=200,
                "config": cfg, "tuning": tuning}
     out_abs = Path(os.path.abspath(out))
     with RunFolder(out) as run:
+        check_kind(run.path, "odometry")
         run.check_writable(run.csv)
         _check_same_survey(run, settings)      # (before anything of that survey is removed)
         run.clear_outputs()
