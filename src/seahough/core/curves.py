@@ -30,8 +30,9 @@ written here), in two stages:
    direction the new direction; where the profile shows no rope there (a
    piece that fits with its back half, beyond the rope's end), the step
    failed. After a miss, one to three steps further are tried (a stretch
-   buried in silt: the polyline crosses it on a cubic through the two ends
-   and their directions, flagged ``gap_bridged``). The following ends where
+   buried in silt, or one too faint or too bent for a piece: the polyline
+   crosses it on a cubic through the two ends and their directions, flagged
+   ``gap_bridged``, whatever the reason was). The following ends where
    that fails too, or where the rope leaves the image; each end is then
    carried on along the rope, a few pixels at a time, for as long as its two
    borders are still seen, at most half a piece.
