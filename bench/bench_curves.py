@@ -262,6 +262,9 @@ def run_part(split: str, n: int, methods=METHODS, log=print) -> list:
         for m in methods:
             answers, ms = timed(RUNNERS[m], scene, p)
             row[m] = dict(score_answers(answers, truth), ms=ms, n=len(answers))
+        if "seahough" in methods:   # searched at the other polarity: every answer is false
+            other = dict(p, polarity={"bright": "dark", "dark": "bright"}[p["polarity"]])
+            row["other_polarity"] = len(run_seahough(scene, other))
         rows.append(row)
         if (i + 1) % 10 == 0:
             log(f"  {split}: {i + 1}/{n}")
@@ -300,10 +303,13 @@ VARIANTS = {
     "continuation NFA <= max_nfa / 10": dict(STEP_NFA_SHARE=0.1),
     "continuation min_score 0.4": dict(_STEP_MIN_SCORE=0.4),
     "no profile check at a step's point": dict(_STEP_PROFILE=False),
+    "no profile check at the seed (before 2026-12-06)": dict(_SEED_BALANCE=None),
+    "seed's borders balanced 0.3": dict(_SEED_BALANCE=0.3),
+    "seed's borders balanced 0.7": dict(_SEED_BALANCE=0.7),
     "no shortest curve (min_length 0)": dict(_MIN_PIECES=0.0),
 }
 _TUNED = ("_PIECE_WIDTHS", "_PIECE_MIN", "_SEED_TIMES", "_SHORT_SEEDS", "_FOLLOW_TIMES",
-          "STEP_NFA_SHARE", "_STEP_MIN_SCORE", "_STEP_PROFILE", "_MIN_PIECES")
+          "STEP_NFA_SHARE", "_STEP_MIN_SCORE", "_STEP_PROFILE", "_MIN_PIECES", "_SEED_BALANCE")
 
 
 def run_variants(n_tune: int, n_neg: int, log=print) -> list:
@@ -319,6 +325,7 @@ def run_variants(n_tune: int, n_neg: int, log=print) -> list:
             neg = run_negatives(n_neg, ("seahough",))
             s = summary(rows, "seahough")
             s["false"] = float(np.mean([r["seahough"] for r in neg])) if neg else float("nan")
+            s["flipped"] = float(np.mean([r["other_polarity"] for r in rows]))
             out.append((name, s))
             log(f"  variant {name}: found {s['found']:.2f}, coverage {s['coverage']:.2f}")
     finally:
@@ -404,6 +411,12 @@ def report(test, neg, variants, n, n_neg, seconds, alloc, load) -> str:
         lines.append(f"| {m} | {_pct(s['found'])} | {_pct(s['wrong'])} | {_f(s['mean'])} | "
                      f"{_f(s['p95'])} | {_pct(s['coverage'])} | {_f(false)} | "
                      f"{_f(s['ms'], '{:.0f}')} | {_f(s['ms90'], '{:.0f}')} |")
+    flipped = [r["other_polarity"] for r in test if "other_polarity" in r]
+    if flipped:
+        lines += ["", f"Searched at the other polarity (a dark cable as a bright rope, a bright "
+                  f"rope as a dark cable: the rope is not there), seahough returns "
+                  f"{np.mean(flipped):.2f} curves a scene (in {np.mean(np.array(flipped) > 0):.0%} "
+                  "of the scenes), every one of them false."]
     for key, values, label in (("width", WIDTHS, "width px"), ("bend", BENDS, "bend deg/100 px")):
         lines += ["", f"### By {label} (test part)", "",
                   f"| {label} | cases | " + " | ".join(f"{m} found / coverage" for m in METHODS)
@@ -451,12 +464,13 @@ def report(test, neg, variants, n, n_neg, seconds, alloc, load) -> str:
                   "each row changes one default of `find_curves` (module constants of "
                   "`seahough/core/curves.py`).", "",
                   "| variant | found | wrong answer | coverage | mean px | 95th pct px | false "
-                  "curves per rope-free image | median ms |", "|---|---|---|---|---|---|---|---|"]
+                  "curves per rope-free image | false curves a scene at the other polarity "
+                  "| median ms |", "|---|---|---|---|---|---|---|---|---|"]
         for name, s in variants:
             lines.append(f"| {name} | {_pct(s['found'])} | {_pct(s['wrong'])} | "
                          f"{_pct(s['coverage'])} | "
                          f"{_f(s['mean'])} | {_f(s['p95'])} | {_f(s['false'])} | "
-                         f"{_f(s['ms'], '{:.0f}')} |")
+                         f"{_f(s['flipped'])} | {_f(s['ms'], '{:.0f}')} |")
     return "\n".join(lines) + "\n"
 
 
