@@ -253,6 +253,13 @@ def test_bit_depth_option_reads_twelve_bit_files(tmp_path):
     proc = run("detect", "circle:16", p, "--json", "--bit-depth", "12")
     assert proc.returncode == 0 and len(json.loads(proc.stdout)["detections"]) == 3
     assert_one_error_line(run("detect", "circle:16", p, "--bit-depth", "8"), "--bit-depth")
+    # a pattern cut from such a file is read the same way
+    crop = tmp_path / "crop12.png"
+    cv2.imwrite(str(crop), cv2.imread(str(p), cv2.IMREAD_UNCHANGED)[150:330, 100:300])
+    proc = run("detect", crop, p, "--json", "--bit-depth", "12", "--scale-range", "0.9", "1.1")
+    assert proc.returncode == 0, proc.stderr
+    best = json.loads(proc.stdout)["detections"][0]
+    assert abs(best["x"] - 199.5) < 1.0 and abs(best["y"] - 239.5) < 1.0
     seq = tmp_path / "seq"
     seq.mkdir()
     for i in range(3):

@@ -198,6 +198,35 @@ def test_main_reports_an_interrupt_inside_compiled_code_as_interrupted(raising_c
         main(["boom"])
 
 
+def test_main_reports_sigterm_as_terminated_also_inside_compiled_code(raising_command, capsys,
+                                                                     monkeypatch):
+    """SIGTERM is raised as the CLI's own _Terminated (where Ctrl-C would be),
+    inside a compiled kernel wrapped in SystemErrors as a Ctrl-C is there:
+    one line, status 143, no traceback; an ignored SIGTERM stays ignored."""
+    import signal
+
+    from seahough.cli import _Terminated, _catch_sigterm
+
+    inside = _Terminated()
+    for _ in range(2):
+        try:
+            raise SystemError("returned a result with an exception set") from inside
+        except SystemError as e:
+            inside = e
+    for exc in (_Terminated(), inside):
+        raising_command["exc"] = exc
+        with pytest.raises(SystemExit) as e:
+            main(["boom"])
+        assert e.value.code == 143
+        err = capsys.readouterr().err
+        assert err.startswith("seahough: error: terminated (SIGTERM)") and err.count("\n") == 1
+    old = signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    try:
+        assert _catch_sigterm() is None and signal.getsignal(signal.SIGTERM) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
 def test_ctrl_c_during_detection_is_one_line_and_status_130(tmp_path):
     """SIGINT at 14 moments of a detection run, 0.05-1.5 s after its first
     image (some land inside the compiled kernels: before, 2 of 19 such

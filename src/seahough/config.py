@@ -350,7 +350,7 @@ def config_record(config: Config) -> dict:
     (False, 12)
     """
     rec = dataclasses.asdict(config)
-    if rec.get("bit_depth") is None:
+    if rec.get("bit_depth") in (None, 16):    # (16 bits: read as unset)
         rec.pop("bit_depth", None)
     return rec
 

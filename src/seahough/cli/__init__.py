@@ -120,15 +120,15 @@ def cli():
     """
 
 
-def _interrupted(exc: BaseException) -> bool:
-    """Is a KeyboardInterrupt among the causes and contexts of ``exc``?"""
+def _interrupted(exc: BaseException, kind=KeyboardInterrupt) -> bool:
+    """Is a ``kind`` (a KeyboardInterrupt) among the causes and contexts of ``exc``?"""
     seen = set()
     todo = [exc]
     while todo:
         e = todo.pop()
         if e is None or id(e) in seen:
             continue
-        if isinstance(e, KeyboardInterrupt):
+        if isinstance(e, kind):
             return True
         seen.add(id(e))
         todo += [e.__cause__, e.__context__]
@@ -142,6 +142,10 @@ class _Terminated(BaseException):
     that click does not take it for a Ctrl-C at a prompt)."""
 
 
+_TERM_MESSAGE = ("terminated (SIGTERM); what was done is kept (a survey goes on where it "
+                 "stopped when run again; seahough odometry: run it again with --resume)")
+
+
 def _on_sigterm(signum, frame):
     raise _Terminated()
 
@@ -152,6 +156,8 @@ def _catch_sigterm():
     if threading.current_thread() is not threading.main_thread():
         return None
     try:
+        if signal.getsignal(signal.SIGTERM) is signal.SIG_IGN:   # (the caller's choice)
+            return None
         return signal.signal(signal.SIGTERM, _on_sigterm)
     except (ValueError, OSError):   # pragma: no cover  (no signals here)
         return None
@@ -197,8 +203,7 @@ def _run(argv) -> int:
         _err(msg)
         rv = e.exit_code
     except _Terminated:
-        _err("terminated (SIGTERM); what was done is kept: run the same command to "
-             "continue (odometry: with --resume)")
+        _err(_TERM_MESSAGE)
         rv = 143
     except (click.exceptions.Abort, KeyboardInterrupt):
         _err("interrupted")
@@ -207,11 +212,15 @@ def _run(argv) -> int:
         # Ctrl-C inside a compiled (Numba) kernel: the KeyboardInterrupt is
         # raised while its results are converted, and surfaces as a
         # SystemError ("returned a result with an exception set") caused by it
-        if not _interrupted(e):
+        if _interrupted(e, _Terminated):
+            _err(_TERM_MESSAGE)
+            rv = 143
+        elif not _interrupted(e):
             raise
-        click.echo(err=True)  # as click does for a KeyboardInterrupt (after the ^C)
-        _err("interrupted")
-        rv = 130
+        else:
+            click.echo(err=True)  # as click does for a KeyboardInterrupt (after the ^C)
+            _err("interrupted")
+            rv = 130
     except (_Fail, SeahoughError) as e:
         _err(str(e))
         rv = 2

@@ -162,19 +162,20 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, max_widt
         return
     plot.plot_detections(img, dets, ov, pattern=pat, title=head, max_width=max_width)
     written["overlay"] = str(ov)
-    planes, acc_dets, acc_title = res.planes, dets, f"{Path(name).name}: accumulator"
-    if detector.parts:   # one pattern's planes: the best detection's (else the first's)
+    planes, feats = res.planes, res.features
+    acc_dets, acc_title = dets, f"{Path(name).name}: accumulator"
+    if detector.parts:   # one pattern's planes and edges: the best detection's (else the first's)
         which = dets[0].pattern if dets else next(iter(detector.parts))
         part = res.parts.get(which) if res.parts else None
         if part is not None:
-            planes = part.planes
+            planes, feats = part.planes, part.features
         acc_dets = [d for d in dets if d.pattern == which]
         acc_title += f" of pattern {which}"
     ac = Path(f"{base}_accumulator.png")
     plot.plot_accumulator(planes, acc_dets, ac, title=acc_title, note=res.note)
     written["accumulator"] = str(ac)
     ed = Path(f"{base}_edges.png")
-    plot.plot_edges(img, res.features, ed, title=f"{Path(name).name}: what the detector sees")
+    plot.plot_edges(img, feats, ed, title=f"{Path(name).name}: what the detector sees")
     written["edges"] = str(ed)
 
 

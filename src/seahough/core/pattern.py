@@ -140,7 +140,8 @@ class Pattern:
 
     def __init__(self, image, mask=None, origin=None, *, polarity="bright", kind="image",
                  outline=None, closed=True, edge_mask=None, config: Config | None = None):
-        gray, colour = _pio.grey_and_colour(image)
+        gray, colour = _pio.grey_and_colour(image, bit_depth=None if config is None
+                                            else config.bit_depth)
         self._setup(gray, mask, origin, polarity, kind, outline, closed, edge_mask, config,
                     colour)
 

@@ -18,15 +18,17 @@ from ..io.images import read_image, to_gray, to_image
 FILE_VERSION = 1
 
 
-def grey_and_colour(image, name: str = "pattern"):
+def grey_and_colour(image, name: str = "pattern", bit_depth: int | None = None):
     """``(grey, colour)``: a pattern image (path or array) as :func:`to_gray`
     makes it, and as BGR float32 levels (:func:`to_image`) when it has colour
-    (else None). A file is read once."""
+    (else None); a 16-bit one read as ``bit_depth``-bit data
+    (:attr:`Config.bit_depth`). A file is read once."""
     if isinstance(image, (str, os.PathLike)):
         name = str(image)
         image = read_image(image)
-    colour = to_image(image, True, name=name)
-    return to_gray(image, name=name), (colour if colour.ndim == 3 else None)
+    colour = to_image(image, True, name=name, bit_depth=bit_depth)
+    return (to_gray(image, name=name, bit_depth=bit_depth),
+            (colour if colour.ndim == 3 else None))
 
 
 def save(p, path) -> Path:
