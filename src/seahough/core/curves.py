@@ -99,10 +99,11 @@ _STEP_PROFILE = True     # a step's point must show the rope's two borders
 #: this share of the stronger (None: no check). A rope is one material against
 #: one seabed on both sides; a dark cable searched for as a bright rope shows
 #: its own strong border on one side of a "bright band" beside it and only the
-#: seabed's texture on the other. Tune part (60 scenes of bench/bench_curves.py,
-#: each also searched at the other polarity): curves at the wrong polarity 0.57
-#: a scene without the check, 0.45 with a profile but any balance, 0.17 at 0.3,
-#: 0.02 at 0.5 and 0.7; ropes found 97 % at 0.5 as without, 93 % at 0.7.
+#: seabed's texture on the other. Tune part of bench/bench_curves.py (100
+#: scenes, each also searched at the other polarity; docs/curves.md): curves at
+#: the wrong polarity 0.58 a scene without the check, 0.18 at 0.3, 0.03 at 0.5,
+#: 0.02 at 0.7; ropes found 94 % without, 93 % at 0.5, 91 % at 0.7 (its first
+#: 60 scenes, where 0.5 was chosen: 97 % either way, 93 % at 0.7).
 _SEED_BALANCE = 0.5
 
 
@@ -418,7 +419,8 @@ class _Follower:
 
 def _trace(det, res, gray, w, s_range, length, step_cfg, max_turn, step_nfa, others, polarity):
     """The curve grown from a seed detection, or None when it lies on a
-    curve found before."""
+    curve found before or its point does not show the rope's profile
+    (:data:`_SEED_BALANCE`)."""
     sx, sy = _seed_position(res, det)
     d = _direction(det.line_angle)
     lo, hi = s_range[0] * w, s_range[1] * w
