@@ -30,7 +30,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import command, machine, steady_allocator, write_page  # noqa: E402  (single thread first)
+from _common import command, machine, publish, steady_allocator  # noqa: E402  (single thread first)
 
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
@@ -253,18 +253,11 @@ def main(argv=None) -> str:
     args = ap.parse_args(argv)
     if args.quick and args.write:
         ap.error("--quick with --write would replace the page by a smoke test")
-    data = shared_data_dir()
-    if data is None or not (data / "sequences").is_dir():
-        print("Skipped: the real data (../shared/data/sequences) is not present.")
-        return ""
-    allocator = steady_allocator()
-    t0 = time.perf_counter()
-    rows = run(args.quick)
-    text = report(rows, time.perf_counter() - t0, allocator)
-    print(text)
-    out = args.out or (str(DOC) if args.write else None)
-    if out:
-        write_page(text, out)
+    if shared_data_dir() is None or not (shared_data_dir() / "sequences").is_dir():
+        sys.exit("no data: ../shared/data/sequences is missing")
+    allocator, t0 = steady_allocator(), time.perf_counter()
+    text = report(run(args.quick), time.perf_counter() - t0, allocator)
+    publish(text, args, str(DOC))
     return text
 
 

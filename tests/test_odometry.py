@@ -595,15 +595,19 @@ O.run_odometry(sys.argv[1], sys.argv[2], progress=False, mosaic=False)
 """
 
 
-def test_killed_run_resumes_to_the_same_result(tmp_path):
+def _stopped_mid_run(tmp_path, script, sig, name):
+    """A run of ``script`` over 14 frames, sent ``sig`` once 5 rows are
+    written: ``(proc, stderr, frames folder, out, the uninterrupted run)``."""
     frames, _ = _sequence("line", n=14, seed=9)
     folder = tmp_path / "frames"
     _write_frames(frames, folder)
     full = run_odometry(folder, tmp_path / "full", progress=False, mosaic=False)
-    out = tmp_path / "killed"
+    out = tmp_path / name
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")]))
-    proc = subprocess.Popen([sys.executable, "-c", _KILL_SCRIPT, str(folder), str(out)], env=env)
+    proc = subprocess.Popen([sys.executable, "-c", script, str(folder), str(out)], env=env,
+                            stderr=subprocess.PIPE, text=True)
     csv_path = out / "odometry.csv"
+    err = ""
     try:
         deadline = time.time() + 60
         while time.time() < deadline:
@@ -612,17 +616,26 @@ def test_killed_run_resumes_to_the_same_result(tmp_path):
             if proc.poll() is not None:
                 break
             time.sleep(0.02)
-        assert proc.poll() is None, "the run ended before it could be killed"
-        os.kill(proc.pid, signal.SIGKILL)
-        proc.wait(timeout=10)
+        assert proc.poll() is None, "the run ended before it could be stopped"
+        os.kill(proc.pid, sig)
+        _, err = proc.communicate(timeout=30)
     finally:
         if proc.poll() is None:
             proc.kill()
-    done = read_odometry_csv(csv_path)
-    assert 5 <= len(done) < 14                                # killed mid-run, rows kept
+    return proc, err, folder, out, full
+
+
+def _resumes_to(folder, out, full):
+    done = read_odometry_csv(out / "odometry.csv")
+    assert 5 <= len(done) < 14                                # stopped mid-run, rows kept
     res = run_odometry(folder, out, resume=True, progress=False, mosaic=False)
     assert res.summary["resumed_rows"] == len(done)
     assert _csv_without_timing(res.csv_path) == _csv_without_timing(full.csv_path)
+
+
+def test_killed_run_resumes_to_the_same_result(tmp_path):
+    _, _, folder, out, full = _stopped_mid_run(tmp_path, _KILL_SCRIPT, signal.SIGKILL, "killed")
+    _resumes_to(folder, out, full)
 
 
 _TERM_SCRIPT = """
@@ -642,36 +655,11 @@ def test_sigterm_stops_the_command_like_ctrl_c_and_the_run_resumes(tmp_path):
     """``kill`` (SIGTERM: a batch system's time limit, ``docker stop``) stops
     ``seahough odometry`` as Ctrl-C does: one line, exit 143, the rows done are
     kept, and --resume finishes the run as an uninterrupted one."""
-    frames, _ = _sequence("line", n=14, seed=9)
-    folder = tmp_path / "frames"
-    _write_frames(frames, folder)
-    full = run_odometry(folder, tmp_path / "full", progress=False, mosaic=False)
-    out = tmp_path / "term"
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")]))
-    proc = subprocess.Popen([sys.executable, "-c", _TERM_SCRIPT, str(folder), str(out)], env=env,
-                            stderr=subprocess.PIPE, text=True)
-    csv_path = out / "odometry.csv"
-    try:
-        deadline = time.time() + 60
-        while time.time() < deadline:
-            if csv_path.exists() and len(csv_path.read_text().splitlines()) >= 6:
-                break
-            if proc.poll() is not None:
-                break
-            time.sleep(0.02)
-        assert proc.poll() is None, "the run ended before it could be stopped"
-        os.kill(proc.pid, signal.SIGTERM)
-        _, err = proc.communicate(timeout=30)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
+    proc, err, folder, out, full = _stopped_mid_run(tmp_path, _TERM_SCRIPT, signal.SIGTERM,
+                                                    "term")
     assert proc.returncode == 143, err
     assert err.count("\n") == 1 and "terminated (SIGTERM)" in err and "Traceback" not in err
-    done = read_odometry_csv(csv_path)
-    assert 5 <= len(done) < 14
-    res = run_odometry(folder, out, resume=True, progress=False, mosaic=False)
-    assert res.summary["resumed_rows"] == len(done)
-    assert _csv_without_timing(res.csv_path) == _csv_without_timing(full.csv_path)
+    _resumes_to(folder, out, full)
 
 
 # ---------------------------------------------------------------- real sequences
