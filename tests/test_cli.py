@@ -248,10 +248,16 @@ def test_bit_depth_option_reads_twelve_bit_files(tmp_path):
     photo = data / "objects" / "robosub_transdec" / "images" / "1448.jpg"
     p = tmp_path / "b12.png"
     cv2.imwrite(str(p), cv2.imread(str(photo), cv2.IMREAD_GRAYSCALE).astype(np.uint16) * 16)
-    proc = run("detect", "circle:16", p, "--json")
+    proc = run("detect", "circle:16", p, "--json", "--out", tmp_path / "dark")
     assert proc.returncode == 1 and json.loads(proc.stdout)["found"] is False
-    proc = run("detect", "circle:16", p, "--json", "--bit-depth", "12")
+    proc = run("detect", "circle:16", p, "--json", "--bit-depth", "12", "--out", tmp_path / "pics")
     assert proc.returncode == 0 and len(json.loads(proc.stdout)["detections"]) == 3
+    # the overlay draws the photo as the search read it, not 16 times too dark
+    middle = [cv2.imread(str(tmp_path / d / "b12_overlay.png"), cv2.IMREAD_GRAYSCALE)
+              for d in ("dark", "pics")]
+    middle = [float(np.median(m[m.shape[0] // 3:2 * m.shape[0] // 3,
+                                m.shape[1] // 3:2 * m.shape[1] // 3])) for m in middle]
+    assert middle[1] > 60 and middle[0] < 20, middle
     assert_one_error_line(run("detect", "circle:16", p, "--bit-depth", "8"), "--bit-depth")
     # a pattern cut from such a file is read the same way
     crop = tmp_path / "crop12.png"

@@ -11,7 +11,6 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import click
-import numpy as np
 
 from ..config import Config
 from ..core.detector import FLAG_ALONG_LINE, Detector
@@ -131,10 +130,6 @@ def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir,
     written: dict = {}
     failed = None
     if stem is not None:
-        if img.dtype == np.uint16 and cfg.bit_depth is not None:   # (drawn as searched)
-            from ..io.images import to_bgr8
-
-            img = to_bgr8(img, cfg.bit_depth)
         try:
             _pictures(name, img, res, detector, pat, out_dir / stem, max_width, written)
         except SeahoughError as e:
@@ -157,10 +152,12 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, max_widt
     if isinstance(detector, CurveSearch):    # curves: the overlay only
         head = f"{Path(name).name}: " + (f"{n} curve{'s' if n > 1 else ''}" if n
                                          else "no curve found")
-        plot.plot_curves(img, dets, ov, title=head, max_width=max_width)
+        plot.plot_curves(img, dets, ov, title=head, max_width=max_width,
+                         bit_depth=detector.config.bit_depth)
         written["overlay"] = str(ov)
         return
-    plot.plot_detections(img, dets, ov, pattern=pat, title=head, max_width=max_width)
+    plot.plot_detections(img, dets, ov, pattern=pat, title=head, max_width=max_width,
+                         bit_depth=detector.config.bit_depth)
     written["overlay"] = str(ov)
     planes, feats = res.planes, res.features
     acc_dets, acc_title = dets, f"{Path(name).name}: accumulator"

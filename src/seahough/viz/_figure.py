@@ -103,12 +103,17 @@ def _finish(fig: Figure, path) -> Figure:
     return fig
 
 
-def _as_display(image) -> tuple[np.ndarray, bool]:
+def _as_display(image, bit_depth: int | None = None) -> tuple[np.ndarray, bool]:
     """``(array for imshow, is_colour)`` from a path or an OpenCV array:
-    8-bit BGR or BGRA as RGB, anything else as grey levels (0-255)."""
+    8-bit BGR or BGRA as RGB, anything else as grey levels (0-255); a uint16
+    one of ``bit_depth`` bits (:attr:`seahough.Config.bit_depth`) as the
+    search reads it."""
     if isinstance(image, (str, os.PathLike)):
         image = read_image(image)
     a = np.asarray(image)
+    if a.dtype == np.uint16 and bit_depth is not None:
+        a = to_bgr8(a, bit_depth) if a.ndim == 3 else to_gray(a, min_side=1,
+                                                              bit_depth=bit_depth)
     if a.ndim == 3 and a.shape[2] in (3, 4) and a.dtype == np.uint8:
         return cv2.cvtColor(to_bgr8(a), cv2.COLOR_BGR2RGB), True
     return to_gray(a, min_side=1), False

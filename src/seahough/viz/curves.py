@@ -30,7 +30,8 @@ def _curve_label(c) -> str:
         + flags
 
 
-def plot_curves(image, curves, path=None, *, title=None, max_width=None) -> Figure:
+def plot_curves(image, curves, path=None, *, title=None, max_width=None,
+                bit_depth=None) -> Figure:
     """The image with each curve's centre line and borders.
 
     Parameters
@@ -48,8 +49,8 @@ def plot_curves(image, curves, path=None, *, title=None, max_width=None) -> Figu
         Where to save the PNG.
     title : str, optional
         Default: how many curves were found.
-    max_width : int or "native", optional
-        As :func:`~seahough.viz.plot_detections` takes it.
+    max_width, bit_depth : optional
+        As :func:`~seahough.viz.plot_detections` takes them.
 
     Returns
     -------
@@ -66,7 +67,7 @@ def plot_curves(image, curves, path=None, *, title=None, max_width=None) -> Figu
     >>> tuple(int(v) for v in fig.get_size_inches() * fig.dpi)
     (1000, 775)
     """
-    fig, ax, _, _, (w, h), _ = _image_figure(image, max_width)
+    fig, ax, _, _, (w, h), _ = _image_figure(image, max_width, bit_depth)
     ax.set_xlabel("x (px)")
     ax.set_ylabel("y (px)")
     curves = list(curves or [])

@@ -468,12 +468,12 @@ def _notes_below(fig, items, pattern, top_left, width, nf_size):
         _pattern_beside(fig, pattern, x, y, side if pw >= ph else side * pw / ph)
 
 
-def _image_figure(image, max_width):
+def _image_figure(image, max_width, bit_depth=None):
     """The figure of an image drawn as :func:`plot_detections` draws it:
     ``(fig, ax, disp, colour, (w, h), (iw, ih))``, ``(iw, ih)`` the image
     box in px."""
     max_width = _check_max_width(max_width)
-    disp, colour = _as_display(image)
+    disp, colour = _as_display(image, bit_depth)
     h, w = disp.shape[:2]
     fw, fh = detections_size((h, w), max_width=max_width)
     fig = _figure(fw, fh)
@@ -485,7 +485,7 @@ def _image_figure(image, max_width):
 
 
 def plot_detections(image, detections, path=None, *, pattern=None, title=None,
-                    max_width=None) -> Figure:
+                    max_width=None, bit_depth=None) -> Figure:
     """The image with each detection's outline, origin and numbers.
 
     Parameters
@@ -525,6 +525,10 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
         own width (pixel for pixel, up to 8192 px on its longer side), e.g.
         to look closely at a 4K photo. Default (None): 900 px on its longer
         side, whatever its size.
+    bit_depth : int, optional
+        A uint16 image's significant bits, as the search read it
+        (:attr:`seahough.Config.bit_depth`: a 12-bit camera's frames are
+        otherwise drawn 16 times too dark).
 
     Returns
     -------
@@ -548,7 +552,7 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
     >>> tuple(int(v) for v in fig.get_size_inches() * fig.dpi)
     (1000, 775)
     """
-    fig, ax, disp, colour, (w, h), (iw, ih) = _image_figure(image, max_width)
+    fig, ax, disp, colour, (w, h), (iw, ih) = _image_figure(image, max_width, bit_depth)
     gray = None
     if any(d.kind == "line" for d in detections or []):
         gray = cv2.cvtColor(disp, cv2.COLOR_RGB2GRAY) if colour else disp
