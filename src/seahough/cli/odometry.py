@@ -103,10 +103,13 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
     names when every name has one, e.g. cam_20240210_134109.500.png, else in
     natural name order: f2 before f10), one or more video files (read frame
     by frame, one after the other), or image files in the order given. An earlier frame (a keyframe) is the pattern searched
-    for in each frame; the accumulator peak is the motion. Positions are in pixels of the first
-    frame, or metres with --metres-per-pixel, or --altitude and --focal-px.
+    for in each frame; the accumulator peak is the motion. Positions (x, y)
+    are where each frame's centre lies in pixels of the first frame (frame 0
+    at its own centre); x_m, y_m with --metres-per-pixel, or --altitude and
+    --focal-px, are metres from frame 0's centre. Columns: docs/odometry.md.
     Writes odometry.csv, run.json, summary.json, trajectory.png and mosaic.png
-    to --out (one run at a time: another run on the same --out is refused).
+    to --out (a run's files replace an earlier run's there unless --resume;
+    a run into an --out that another run is writing is refused).
 
     \b
     Exit status: 0 every pair of frames was measured; 1 some frames are

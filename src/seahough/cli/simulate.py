@@ -40,7 +40,11 @@ def simulate(kind, out, count, seed, water, marker_name, size, path_kind, proced
           sequence  frames along a camera path (for `seahough odometry`)
           negative  seabed photos with no marker
     truth.json holds the poses (matrix, x, y, scale, angle), rope angle and
-    offset, or motions, so you can test your own settings. A progress bar
+    offset, or motions (pair: motion, angle; sequence, per frame:
+    matrix_from_first M, centre_in_first, motion_from_previous; odometry.csv's
+    x, y are centre_in_first, its heading is atan2(M[1][0], M[0][0]) in
+    degrees: the camera's turn, the opposite sign of the content's rotation;
+    docs/odometry.md), so you can test your own settings. A progress bar
     is shown on stderr for several scenes when stderr is a terminal.
     """
     o = _out_dir(out)

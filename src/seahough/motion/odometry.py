@@ -82,7 +82,7 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
 
     Parameters
     ----------
-    frames : folder, video file or list of image paths (or of videos)
+    frames : folder, video file, or list of image paths (or of videos) or of arrays
         See :func:`seahough.io.frames.list_frames` (frames of any size, depth and colour; all
         must have the first readable frame's size).
     out_dir : path
