@@ -74,6 +74,9 @@ class SearchResult:
     parts: dict = field(default_factory=dict)
 
 
+#: An image with fewer edge segments than this at the working scale has no
+#: edges to search (``SearchResult.note`` "no edges").
+MIN_SEGMENTS = 4
 #: Config's own number of key points: another one is a user's choice
 #: (:meth:`Detector._n_keypoints` keeps it).
 _DEFAULT_KEYPOINTS = Config().n_keypoints
@@ -251,7 +254,7 @@ class Detector:
                                         weigh_colours=True)
         t1 = time.perf_counter()
         timings["features"] = t1 - t0
-        if len(features.segments) < 4:
+        if len(features.segments) < MIN_SEGMENTS:
             return SearchResult([], None, features, factor, [], timings, note="no edges")
         if s0 > fit:
             return SearchResult([], None, features, factor, [], timings,

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..config import Config, OdometryTuning
+from ..core.detector import MIN_SEGMENTS
 from ..errors import SeahoughError
 from ..geometry import (angle_difference, apply_matrix, frame_centre, matrix_to_pose,
                         overlap, shift_origin, wrap_angle)
@@ -39,9 +40,6 @@ _SAME = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
 #: Why a pair was not measured (the first word of a flagged row's ``flags``).
 REASONS = ("no_match", "low_confidence", "little_overlap", "few_edges")
-#: A frame with fewer edge segments than this at the working scale has too few
-#: edges to be measured (the Detector's "no edges").
-MIN_SEGMENTS = 4
 #: The last attempt before a pair is flagged (``wide``) searches this many
 #: times the full search's shift region, and the per-frame ranges widened as
 #: for this many times the frames of the gap.
