@@ -731,3 +731,16 @@ def test_detect_searches_a_painted_pattern_in_colour_unless_told_grey(tmp_path):
     assert np.hypot(best["x"] - 250.0, best["y"] - 170.0) < 2.0 and abs(best["scale"] - 2) < 0.05
     grey = run(*args, "--grey")        # (in grey levels the pattern has no edge at all)
     assert grey.returncode == 2 and "too few edges" in grey.stderr, grey.stderr
+
+
+def test_odometry_of_one_frame_says_there_is_nothing_to_measure(tmp_path):
+    """One frame: the run writes its one row and says, on stderr, that
+    there was no motion to measure (it used to finish silently)."""
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    img, _ = sim.rope_scene(width=8, water="moderate", seed=5, source="procedural")
+    cv2.imwrite(str(frames / "f0.png"), img)
+    proc = run("odometry", frames, "--out", tmp_path / "o", "--no-mosaic", "--json")
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout)["frames"] == 1
+    assert "1 frame: no motion to measure" in proc.stderr

@@ -161,6 +161,9 @@ def report(result, seconds: float, unit: str, as_json: bool) -> int:
     frames are flagged, else 0."""
     summ = _odometry_summary(result, seconds, unit)
     status = 1 if summ["flagged_pairs"] else 0
+    if summ["frames"] < 2:   # (stderr: the JSON on stdout stays one object)
+        click.echo(f"note: {summ['frames']} frame: no motion to measure (dead reckoning "
+                   "needs two frames or more)", err=True)
     if as_json:
         click.echo(_dumps(summ))
         return status

@@ -122,7 +122,7 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
         not in it (None when no mosaic was built).
     config : seahough.Config, optional
         Search tuning (default :data:`~seahough.config.ODOMETRY_CONFIG`).
-    tuning : seahough.config.OdometryTuning, optional
+    tuning : seahough.OdometryTuning, optional
         The keyframe, prior and fallback policy (the numbers of the notes
         below are its defaults).
     workers : int, optional
@@ -227,7 +227,7 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
         raise ParameterError("config must be a seahough.Config")
     tuning = tuning or TUNING
     if not isinstance(tuning, OdometryTuning):
-        raise ParameterError("tuning must be a seahough.config.OdometryTuning")
+        raise ParameterError("tuning must be a seahough.OdometryTuning")
     scale_range, _ = check_ranges(scale_range, (0.0, 0.0))
     angle_range = pair("angle_range", angle_range)  # kept as given: a window around 0
     mpp = resolve_metres_per_pixel(metres_per_pixel, altitude, focal_px)
@@ -489,7 +489,7 @@ def _doubtful(res, st: State, tuning) -> bool:
     was too (``st.last_method``: the last row's search, "" when its pose was
     assumed; off the prior twice running, the prior does not hold here).
 
-    >>> from seahough.config import OdometryTuning
+    >>> from seahough import OdometryTuning
     >>> from seahough.motion.searcher import Measure
     >>> st = State(key=3, meas=5, last_method="prior")
     >>> full = Measure(np.eye(2, 3), 0.6, 0.5, 0.8, ref=3, method="full")

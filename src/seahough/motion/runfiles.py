@@ -90,10 +90,16 @@ def settings_changes(old: dict, new: dict) -> list[str]:
     >>> settings_changes({"scale_range": [0.9, 1.1], "tuning": {"min_score": 0.2}},
     ...                  {"scale_range": [0.8, 1.2], "tuning": {"min_score": 0.2}})
     ['scale_range [0.9, 1.1] (now [0.8, 1.2])']
+    >>> settings_changes({"metres_per_pixel": 0.0025}, {"metres_per_pixel": 0.00375})
+    ['metres_per_pixel 0.0025 (now 0.00375; given, or altitude / focal length in pixels)']
     """
     a, b = dict(_flat(old)), dict(_flat(new))
-    return [f"{k} {json.dumps(a.get(k))} (now {json.dumps(b.get(k))})"
+    return [f"{k} {json.dumps(a.get(k))} (now {json.dumps(b.get(k))}{_HOW.get(k, '')})"
             for k in sorted(set(a) | set(b)) if a.get(k) != b.get(k)]
+
+
+#: Where a recorded setting comes from, when the user gave it another way.
+_HOW = {"metres_per_pixel": "; given, or altitude / focal length in pixels"}
 
 
 def same_frame(old_name: str, old_cwd: str | None, new_name: str) -> bool:

@@ -218,7 +218,7 @@ def odometry(frames, out, *, workers=None, scheduler=None, chunk_size=200,
         raise ParameterError("config must be a seahough.Config")
     tuning = tuning or OdometryTuning()
     if not isinstance(tuning, OdometryTuning):
-        raise ParameterError("tuning must be a seahough.config.OdometryTuning")
+        raise ParameterError("tuning must be a seahough.OdometryTuning")
     scale_range, _ = check_ranges(scale_range, (0.0, 0.0))
     angle_range = pair("angle_range", angle_range)
     mpp = resolve_metres_per_pixel(metres_per_pixel, altitude, focal_px)
