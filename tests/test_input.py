@@ -36,7 +36,7 @@ def test_every_accepted_form_gives_the_same_grey_levels(conv):
 def test_bit_depth_reads_a_cameras_twelve_bits_in_sixteen_bit_arrays():
     """``bit_depth=12``: values up to 4095 are read as the 8-bit levels they
     stand for (by default, as 16-bit data: 16 times darker); beyond the
-    stated depth, 255; every frame alike, whatever its own largest value."""
+    stated depth, 255 (more than 1 % of them: refused); every frame alike, whatever its own largest value."""
     from seahough.io.images import to_bgr8
 
     g = _scene()
@@ -47,6 +47,11 @@ def test_bit_depth_reads_a_cameras_twelve_bits_in_sixteen_bit_arrays():
     over[0, 0] = 60000
     got = to_gray(over, bit_depth=12)
     assert got[0, 0] == 255.0 and np.array_equal(got[1:], to_gray(twelve, bit_depth=12)[1:])
+    # more than 1 % beyond: not 12-bit data (read so, a mostly white frame): refused
+    wide = g.astype(np.uint16) * 257
+    with pytest.raises(ImageValueError, match=r"frame\.png: \d+ % of the values are beyond "
+                                              r"bit_depth=12 \(0-4095\), up to 56540"):
+        to_gray(wide, bit_depth=12, name="frame.png")
     assert np.abs(to_bgr8(twelve, 12)[..., 0].astype(float) - g).max() <= 1.0
     # (a dark 16-bit image is drawn dark, not taken for [0, 1] floats)
     assert to_bgr8(np.full((4, 4), 10, np.uint16)).max() == 0

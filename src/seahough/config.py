@@ -246,9 +246,10 @@ class Config:
         Significant bits of 16-bit images (9-16): a camera that stores 10-
         or 12-bit samples in 16-bit files gives values up to 1023 or 4095,
         which read as 16-bit data are 64 or 16 times too dark to show edges
-        (levels are divided by ``(2**bit_depth - 1) / 255``, and clipped to
-        255). None: 16 bits. Images of other types are not affected. Fixed
-        for a whole run, so that every frame is read alike.
+        (levels are divided by ``(2**bit_depth - 1) / 255``; values beyond
+        ``2**bit_depth - 1`` are clipped, or the image is refused,
+        ImageValueError, when they are more than 1 % of it: wider samples). None: 16 bits. Images of other types are not
+        affected. Fixed for a whole run, so that every frame is read alike.
     search : SearchTuning
         Fixed choices of the candidate and ranking stages.
     """

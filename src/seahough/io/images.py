@@ -360,9 +360,19 @@ def _levels(image, label, max_pixels, min_side, max_memory_mb, orientation,
         if a.max(initial=0) <= 1.0 and a.min(initial=0) >= 0.0:
             a *= 255.0
     elif a.dtype == np.uint16:
+        most = None if bit_depth is None else 2 ** int(bit_depth) - 1
+        if most is not None and int(a.max(initial=0)) > most:
+            # a few hot pixels are clipped; more than 1 % beyond the stated
+            # depth: wider samples (read so, the frame would be mostly white)
+            over = np.count_nonzero(a > most)
+            if over > 0.01 * a.size:
+                raise ImageValueError(
+                    f"{label}: {100.0 * over / a.size:.0f} % of the values are beyond "
+                    f"bit_depth={int(bit_depth)} (0-{most}), up to {int(a.max())}: these "
+                    f"are wider samples; give their bit depth, or none for 16-bit data")
         a = a.astype(np.float32)
         a /= uint16_divisor(bit_depth)
-        if bit_depth is not None:     # (values beyond the stated depth)
+        if most is not None:     # (values beyond the stated depth)
             np.minimum(a, 255.0, out=a)
     elif a.dtype != np.uint8:
         a = a.astype(np.float32)
