@@ -279,3 +279,21 @@ def test_a_second_post_is_refined_not_lost_behind_the_first():
     assert any(abs(x - 70) < 15 for x in xs) and any(abs(x - 226) < 25 for x in xs), xs
     found = [d.x for d in r.detections]
     assert any(abs(x - 70) < 10 for x in found) and any(abs(x - 226) < 10 for x in found)
+
+
+def test_drawn_shapes_are_found_at_their_own_size():
+    """Shapes are drawn by the area of each pixel they cover: a 60 x 40 box
+    is found at scale 1 (cv2's anti-aliased fill drew the pattern 1.4 px too
+    wide: 0.973), a disc of radius 16 by circle(16) at 1 (0.95 before)."""
+    img = np.full((300, 400), 30, np.uint8)
+    img[100:140, 150:210] = 230                     # 60 x 40 px, centre (179.5, 119.5)
+    d = seahough.Detector(seahough.Pattern.rectangle(60, 40), (0.5, 2.0)).detect(img)[0]
+    assert d.scale == pytest.approx(1.0, abs=0.005)
+    assert (d.x, d.y) == (pytest.approx(179.5, abs=0.15), pytest.approx(119.5, abs=0.15))
+    # a disc of radius 16 centred on pixel (200, 150), by area (8 x 8 samples a pixel)
+    fine = np.zeros((300 * 8, 400 * 8), np.float32)
+    cv2.circle(fine, (200 * 8 + 4, 150 * 8 + 4), 16 * 8, 1.0, -1)
+    cover = cv2.resize(fine, (400, 300), interpolation=cv2.INTER_AREA)
+    img = np.round(30 + 200 * cover).astype(np.uint8)
+    d = seahough.Detector(seahough.Pattern.circle(16), (0.5, 2.0)).detect(img)[0]
+    assert d.scale == pytest.approx(1.0, abs=0.01)

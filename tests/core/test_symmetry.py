@@ -149,7 +149,7 @@ def test_a_known_angle_is_never_turned(monkeypatch):
     assert calls
 
 
-def test_a_box_is_fitted_to_its_edges_whatever_its_turn(monkeypatch):
+def test_a_box_is_fitted_to_its_edges_whatever_its_turn():
     """A clean box turned by 30 or 45 degrees is fitted to its edges. The
     refinement iterates on 100 of the pattern's points; taken every other
     index (the points alternate between the sides), they left out the left
@@ -166,12 +166,9 @@ def test_a_box_is_fitted_to_its_edges_whatever_its_turn(monkeypatch):
     for angle in (30.0, 45.0):
         d = det.detect(box(angle))[0]
         assert d.score >= 0.95 and math.hypot(d.x - 160.0, d.y - 120.0) < 0.5, (angle, d)
-    # (not vacuous: with every n-th index, and no local vote to make up for it)
-    def every_nth(pf, k, frame=False):
-        return np.unique(np.linspace(0, pf.vx.size - 1, min(k, pf.vx.size)).astype(int))
-    monkeypatch.setattr(candidates, "icp_subset", every_nth)
-    monkeypatch.setattr(ranking, "_alternatives", lambda ctx, c, turns: [])
-    assert det.detect(box(30.0))[0].score < 0.9
+    # (the every-other-index subset that failed here fits these boxes too since
+    # the shapes are drawn by area, 2026-12-06: what it guards is the subset's
+    # spread over the sides, checked in test_icp_subset_spreads_over_the_sides)
 
 
 #: Scenes of the coloured-marker benchmark's tune part (bench/bench_colour.py)
@@ -187,7 +184,7 @@ _OFF = (("board", "orange", "oceanic", 1.0, 2, "aqualoc_amphorae_wreck/frame_012
 
 def test_a_pose_a_few_pixels_off_is_moved_onto_the_marker(monkeypatch):
     """The local vote over shifts (and a ring's scale) brings these back;
-    without it none is found (within 3 px, 5 % in scale, 3 degrees). With
+    without it at most 2 are found (within 3 px, 5 % in scale, 3 degrees). With
     128 voting points, as when these cases were collected: with the 256 of
     2026-12-06, 3 of the 5 are found without it too."""
     from seahough._data import shared_data_dir
@@ -211,7 +208,20 @@ def test_a_pose_a_few_pixels_off_is_moved_onto_the_marker(monkeypatch):
     assert sum(found(*case) for case in _OFF) >= 4
     with_vote_256 = sum(found(*case, points=256) for case in _OFF)
     monkeypatch.setattr(ranking, "_shifted", lambda ctx, pose, radius, points: pose)
-    assert sum(found(*case) for case in _OFF) == 0
-    # the default's 256 voting points: found with the vote, and 3 without it
+    # (2 since the colour edges' weighting is smoothed, CHROMA_SIGMA: 0 before)
+    assert sum(found(*case) for case in _OFF) <= 2
+    # the default's 256 voting points: found with the vote, and 3-4 without it
     assert with_vote_256 >= 4
-    assert sum(found(*case, points=256) for case in _OFF) == 3
+    assert sum(found(*case, points=256) for case in _OFF) in (3, 4)
+
+
+def test_icp_subset_spreads_over_the_sides():
+    """The refinement's subset of a rectangle's points covers its four sides
+    about evenly (every other index left out its whole left side)."""
+    from seahough.core import candidates
+
+    pf = seahough.Pattern.rectangle(60, 40).features(1.0)
+    sub = candidates.icp_subset(pf, 100)
+    x, y = pf.vx[sub], pf.vy[sub]
+    sides = [(x < -28).sum(), (x > 28).sum(), (y < -18).sum(), (y > 18).sum()]
+    assert len(sub) <= 100 and min(sides) >= 0.12 * len(sub), sides

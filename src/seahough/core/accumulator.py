@@ -65,6 +65,9 @@ class AccumulatorPlanes:
         Bin centres of ``scale_angle`` (angles in degrees).
     x, y : ndarray
         Full-resolution image coordinates of the ``xy`` columns and rows.
+    pattern : str
+        Which pattern voted, in a search of several named patterns (``""``
+        for a Detector of one pattern).
     """
 
     def __init__(self, xy, best_k, best_d, scale_angle, scales, angles_deg, x, y):
@@ -75,6 +78,7 @@ class AccumulatorPlanes:
         self.angles = angles_deg
         self.x = x
         self.y = y
+        self.pattern = ""    # whose planes, in a search of several named patterns
 
     @functools.cached_property
     def xy_scale(self) -> np.ndarray:
@@ -159,8 +163,8 @@ def edge_gap(pf: PatternFeatures, either: bool = False, n: int = 64) -> float:
     --------
     >>> from seahough.core.pattern import Pattern
     >>> bar = Pattern.rectangle(60, 40, polarity="either").features(1.0)
-    >>> round(edge_gap(bar, either=True))   # its height, mostly (edges 0.7 px out)
-    41
+    >>> round(edge_gap(bar, either=True))   # its height
+    40
     >>> edge_gap(Pattern.rectangle(60, 40).features(1.0))   # no side is another's look-alike
     inf
     """

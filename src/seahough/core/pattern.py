@@ -259,19 +259,14 @@ class Pattern:
         cw, ch = int(math.ceil(w)) + 2 * m + 1, int(math.ceil(h)) + 2 * m + 1
         return np.full((ch, cw), 30, np.uint8), m
 
-    @staticmethod
-    def _fill(img, polys, value):
-        pts = [np.round(np.asarray(p, float) * 16).astype(np.int32).reshape(-1, 1, 2) for p in polys]
-        cv2.fillPoly(img, pts, int(value), lineType=cv2.LINE_AA, shift=4)
-
     @classmethod
     def _shape(cls, polys, w, h, margin, polarity, kind, outline=None, edge_mask=None,
                closed=True, holes=()):
         img, m = cls._canvas(w, h, margin)
         polys = [np.asarray(p, float) + m for p in polys]
-        cls._fill(img, polys, 230)
+        _shapes.fill(img, polys, 230)
         for hole in holes:
-            cls._fill(img, [np.asarray(hole, float) + m], 30)
+            _shapes.fill(img, [np.asarray(hole, float) + m], 30)
         if outline is None:
             outline = polys + [np.asarray(hh, float) + m for hh in holes]
         else:

@@ -128,7 +128,9 @@ def compute_gradients(gray: np.ndarray, factor: float = 1.0, equalize: bool = Fa
         The magnitude and direction are those of the weighted channels; the
         sign rule above stays that of the channels as they are, so that
         "bright" and "dark" keep their meaning. ``Gradients.metric`` holds
-        the weighting used.
+        the weighting used. What the weighting adds over the channels as
+        they are is smoothed by :data:`CHROMA_SIGMA` full-resolution pixels
+        (a camera's colour is coarser than its brightness).
 
     Examples
     --------
@@ -170,6 +172,18 @@ def compute_gradients(gray: np.ndarray, factor: float = 1.0, equalize: bool = Fa
     mag += gy * gy
     np.sqrt(mag, out=mag)  # (in place: the same numbers, fewer temporaries)
     return Gradients(small, gx, gy, mag, fx, fy, gray.shape)
+
+
+#: Gaussian sigma, in full-resolution pixels, of what :func:`colour_metric`'s
+#: weighting adds to a colour image's derivatives (its gain over 1, along the
+#: colour directions): JPEG and most cameras sample colour every second pixel
+#: (4:2:0, a Bayer mosaic), so colour detail finer than that is their noise and
+#: block edges, which a gain of up to ``Config.colour_boost`` would raise to the
+#: texture's strength (a rectangle found on the block grid inside its own
+#: paint). Chosen on the tune parts (bench_colour.py, bench_robosub.py): 1 px
+#: found 3 more of 576 coloured markers and 10 % more buoys in colour at
+#: unchanged settings; 2 px lost thin gate posts (their two borders merge).
+CHROMA_SIGMA = 1.0
 
 
 def colour_metric(gxc: np.ndarray, gyc: np.ndarray, boost: float) -> np.ndarray | None:
@@ -234,8 +248,17 @@ def _colour_gradients(small: np.ndarray, fx: float, fy: float, full_shape,
                   else np.asarray(metric, np.float32).reshape(3, 3))
     # the sign (below) is taken from the channels as they are; the tensor
     # from the weighted ones
-    wxc, wyc = ((gxc, gyc) if metric is None else
-                (cv2.transform(gxc, metric), cv2.transform(gyc, metric)))
+    if metric is None:
+        wxc, wyc = gxc, gyc
+    else:   # the channels as they are, plus what the weighting adds, smoothed
+        sigma = CHROMA_SIGMA * min(fx, fy)
+        extra = metric - np.eye(3, dtype=np.float32)
+        wxc, wyc = cv2.transform(gxc, extra), cv2.transform(gyc, extra)
+        if sigma >= 0.3:   # (below, a kernel of weights ~(0, 1, 0))
+            wxc = cv2.GaussianBlur(wxc, (0, 0), sigma, borderType=cv2.BORDER_REPLICATE)
+            wyc = cv2.GaussianBlur(wyc, (0, 0), sigma, borderType=cv2.BORDER_REPLICATE)
+        wxc += gxc
+        wyc += gyc
     bx, gx_, rx = wxc[:, :, 0], wxc[:, :, 1], wxc[:, :, 2]
     by, gy_, ry = wyc[:, :, 0], wyc[:, :, 1], wyc[:, :, 2]
     # (float32 numpy, in place where it can be: a third of the time of a plain
