@@ -18,6 +18,7 @@ from ..geometry import (corner_gap, frame_centre, matrix_to_pose, overlap, shift
 from .parallax import check_locally, frame_points, work_matrix
 from .perspective import check_perspective, judge_homography, shared_agreement
 from .pyramid import CoarseVote, coarse_to_fine, coarse_vote, ladder
+from .repeats import resolve
 from .._validate import check_max_nfa, number
 from ..io.images import to_gray
 
@@ -320,7 +321,7 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
                  min_score: float, min_confidence: float, config: Config,
                  features: Features | None = None, rescue: bool = True,
                  tiles: bool = False, perspective: bool = True,
-                 coarse: bool = True) -> PairMeasure | None:
+                 coarse: bool = True, decline_repeats: bool = True) -> PairMeasure | None:
     """The search that measures a pair: the previous frame (``pattern``) in the
     current one (``gray``, a checked grey image as :func:`~seahough.to_gray`
     gives), its centre within ``region`` (x0, y0, x1, y1; current-frame
@@ -376,6 +377,10 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
                    search_region=region)
     res = det.search(gray, features=features)
     d = res.detections[0] if res.detections else None
+    # a repeated texture's look-alikes (repeats.py; not around a prediction:
+    # the copy nearest it is the answer)
+    done = (lambda m: resolve(m, res, pattern, config, decline_repeats)) if rescue else (
+        lambda m: m)
     # the similarity's own answer (None: the search found none)
     own = None if d is None else PairMeasure(np.asarray(d.matrix, float), d.confidence,
                                               d.score, d.nfa)
@@ -396,15 +401,15 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
                 fine = _explains_more(vote, own, d, pattern, gray, scale_range, angle_range,
                                       region, config, res)
                 if fine is not None:
-                    return fine
+                    return done(fine)
         if tiles:   # (the answer's own tiles: no other candidate)
             check = check_locally(pattern, res, d, region, scale_range, angle_range, config,
                                   candidates=0)
             if check is not None:
                 own.parallax, own.homography = check.parallax, check.homography
-        return own
+        return done(own)
     if not rescue or res.features is None:
-        return own
+        return done(own)
     frame = frame_points(pattern, res.factor, config)   # (the previous frame's, for the checks)
     check = None
     if res.candidates:
@@ -413,7 +418,7 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
     if check is not None and check.distinct >= RESCUE_DISTINCT:
         # (a peak the vote hardly prefers to its runner-up is a look-alike of a
         # repeated texture as often as a view spoilt by parallax: not rescued)
-        return PairMeasure.of(check)
+        return done(PairMeasure.of(check))
     # a vote that hardly prefers its answer: a repeated texture (a tiled
     # floor), or a camera that looks ahead. The pair voted again where the
     # repeats blur away and refined up as a homography; failing that, the
@@ -433,11 +438,11 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
             # than the vote's answer that the check confirmed: a look-alike
             # (over a tiled floor, 5-19 % of the diagonal off at confidence
             # 0.57-0.66)
-            return own
+            return done(own)
         fine = check
     if fine is not None and fine.confidence >= min_confidence and fine.score >= min_score:
-        return PairMeasure.of(fine)
-    return own
+        return done(PairMeasure.of(fine))
+    return done(own)
 
 
 def _repeated(res) -> bool:

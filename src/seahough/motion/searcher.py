@@ -106,7 +106,7 @@ class Searcher:
                             min_score=self.tuning.min_score,
                             min_confidence=self.tuning.min_confidence, config=cfg,
                             features=feats, rescue=rescue, perspective=adjacent,
-                            coarse=adjacent)
+                            coarse=adjacent, decline_repeats=False)
 
     def ranges_around(self, base, n: int, widen: int = 1):
         """Scale and angle ranges of the user's per-pair ranges, ``n`` frames

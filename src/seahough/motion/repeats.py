@@ -1,0 +1,287 @@
+"""Repeated textures: the look-alikes of a motion one period of the texture away.
+
+A tiled floor, a grating, a net: a frame that repeats itself by a shift
+``v`` gives the previous frame placed ``v`` away from the true motion nearly
+the score of the true one, and the vote keeps one peak per neighbourhood, so
+a search can report one of the copies as unique (a simulated tiled floor:
+8 of 16 pairs answered 88-245 px off at confidence 0.19-0.79). The periods
+are read from the current frame's own gradient magnitude (the highest peaks
+of its autocorrelation away from the origin), the answer's pose is moved by
+each, and the best score found there is a runner-up the confidence must
+count (:func:`repeat_confidence`). Where a copy fits as well, the frames'
+grey levels, blurred past the repeated lines, choose among the copies
+(:func:`look_shift`), or the answer is declined (:func:`resolve`; the
+measurement of a pair from scratch, :func:`~.pair.measure_pair`, calls it).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import cv2
+import numpy as np
+
+from ..config import Config
+from ..core.features import Features
+from ..core.pattern import Pattern
+from ..core.ranking import confidence
+from ..core.refine import Pose, refine
+
+#: Periods are looked for up to this share of the frame's width and height.
+MAX_LAG = 0.25
+#: ... and from this many working pixels (the autocorrelation's own central
+#: peak is about an edge's width).
+MIN_LAG = 4
+#: An autocorrelation peak at least this high (1: the frame is the same
+#: shifted) is a period worth testing.
+MIN_PERIODIC = 0.25
+#: A gradient magnitude of at least twice this many pixels a side is searched
+#: for periods at half its resolution (from 1.5 MIN_LAG px on).
+HALF_FROM = 96
+#: How many periods (each tested both ways) at most.
+N_PERIODS = 4
+
+
+def _spectrum(a: np.ndarray, shape) -> np.ndarray:
+    """The DFT of ``a`` (float32) zero-padded to at least twice ``shape``
+    (no wrap-around for shifts under it), as ``cv2.dft`` gives it."""
+    h, w = shape
+    pad = np.zeros((cv2.getOptimalDFTSize(2 * h), cv2.getOptimalDFTSize(2 * w)), np.float32)
+    pad[:a.shape[0], :a.shape[1]] = a
+    return cv2.dft(pad, flags=cv2.DFT_COMPLEX_OUTPUT)
+
+
+def _correlate(fa: np.ndarray, fb: np.ndarray) -> np.ndarray:
+    """``c[t] = sum_x a(x + t) b(x)`` from the spectra of ``a`` and ``b``
+    (:func:`_spectrum`), shifts modulo the padded size."""
+    return cv2.idft(cv2.mulSpectrums(fa, fb, 0, conjB=True),
+                    flags=cv2.DFT_REAL_OUTPUT | cv2.DFT_SCALE)
+
+
+def periods(magnitude: np.ndarray, n: int = N_PERIODS, min_lag: float = MIN_LAG) -> np.ndarray:
+    """The shifts (dx, dy), working pixels, by which the image ``magnitude``
+    (a gradient magnitude) most resembles itself: the highest local maxima
+    of its normalised autocorrelation between ``min_lag`` and
+    :data:`MAX_LAG` of the image, at least :data:`MIN_PERIODIC`, one of
+    each pair ``v, -v``; an (m, 2) array, m <= n (0 rows: no period).
+
+    Examples
+    --------
+    >>> img = np.zeros((96, 128), np.float32)
+    >>> img[::12, ::16] = 1.0                      # a dot every 16 px across, 12 down
+    >>> sorted(tuple(int(c) for c in v) for v in periods(img, 2))
+    [(0, 12), (16, 0)]
+    """
+    m = np.asarray(magnitude, np.float32)
+    if min(m.shape) >= 2 * HALF_FROM:   # at half resolution (a quarter of the time)
+        half = cv2.resize(m, (m.shape[1] // 2, m.shape[0] // 2), interpolation=cv2.INTER_AREA)
+        return 2.0 * periods(half, n, 0.75 * min_lag)   # (6 px: a 16 px tile at 0.5)
+    h, w = m.shape
+    spec = _spectrum(m - np.float32(m.mean()), (h, w))
+    ac = _correlate(spec, spec)
+    if not ac[0, 0] > 0:
+        return np.zeros((0, 2))
+    ly, lx = max(1, int(MAX_LAG * h)), max(1, int(MAX_LAG * w))
+    # lags -ly..ly, -lx..lx, each divided by the overlap it is summed over
+    ys = np.r_[np.arange(0, ly + 1), np.arange(-ly, 0)]
+    xs = np.r_[np.arange(0, lx + 1), np.arange(-lx, 0)]
+    win = ac[np.ix_(ys % ac.shape[0], xs % ac.shape[1])].astype(np.float64)
+    overlap = np.outer(h - np.abs(ys), w - np.abs(xs)) / float(h * w)
+    win = np.fft.fftshift(win / overlap / ac[0, 0])
+    dy, dx = np.mgrid[-ly:ly + 1, -lx:lx + 1]
+    near = np.hypot(dx, dy) < min_lag
+    peak = (win >= cv2.dilate(win.astype(np.float32), np.ones((3, 3), np.uint8))) & ~near
+    peak &= win >= MIN_PERIODIC
+    # one of v, -v (the autocorrelation is symmetric): dy > 0, or dy == 0 and dx > 0
+    peak &= (dy > 0) | ((dy == 0) & (dx > 0))
+    iy, ix = np.nonzero(peak)
+    if not iy.size:
+        return np.zeros((0, 2))
+    # a lattice repeats at every sum of its periods, as high: the shortest of
+    # the peaks near the highest are the periods themselves
+    v = win[iy, ix]
+    keep = v >= 0.5 * v.max()
+    iy, ix = iy[keep], ix[keep]
+    order = np.argsort(np.hypot(dx[iy, ix], dy[iy, ix]), kind="stable")[:n]
+    return np.stack([dx[iy[order], ix[order]], dy[iy[order], ix[order]]], 1).astype(float)
+
+
+def in_view(fit) -> float:
+    """A fit's score over the share of the points it keeps in view."""
+    return fit.score / max(fit.inside, 0.05)
+
+
+def repeat_confidence(pattern: Pattern, features: Features, factor: float, pose: Pose,
+                      config: Config) -> tuple[float, float] | None:
+    """(best score, the confidence it leaves) of the working-scale ``pose``
+    against itself moved by each period of the current frame
+    (:func:`periods` of ``features``' gradient magnitude) and refitted
+    (scale and rotation kept): ``confidence(score, r)`` with ``r`` the best
+    score of the moved poses, scores of the points in view
+    (:func:`in_view`). None: the frame has no period.
+    """
+    shifts = periods(features.gradients.magnitude)
+    if not len(shifts):
+        return None
+    pf = pattern.features(factor, config)
+    tol = math.radians(config.angle_tolerance)
+    score_r = max(1.25, config.match_radius * factor)
+
+    def fit(p):   # (the share of the points in view: a shift moves some out)
+        f = refine(p, pf.vx, pf.vy, pf.vangle, features.edges, features.index,
+                   radii=(2.0, 1.25), iterations=4, angle_tol=tol, either=pattern.either,
+                   fix_scale=True, fix_angle=True, score_radius=score_r)
+        return in_view(f)
+
+    best = fit(pose)
+    r = max(fit(Pose(pose.a, pose.b, pose.tx + s * vx, pose.ty + s * vy))
+            for vx, vy in shifts for s in (1.0, -1.0))
+    return best, confidence(best, r)
+
+
+
+#: A frame's appearance picks the copy (:func:`resolve`) by at least this
+#: margin of normalised correlation, ``(best - runner-up) / (1 - runner-up)``,
+#: or the answer keeps the confidence its edges leave it.
+MIN_LOOK_MARGIN = 0.05
+#: ... and only at a correlation of at least this (the right copy of a tiled
+#: floor correlated at 0.99, the wrong ones' best under 0.9).
+MIN_LOOK = 0.8
+#: A copy the grey levels chose must fit the edges at least this share as
+#: well as the answer (a copy one period away fits them alike).
+MIN_COPY = 0.9
+#: The grey levels are compared over shifts up to this share of the frame.
+LOOK_LAG = 0.5
+#: The grey levels are compared blurred by this share of the shortest period.
+LOOK_BLUR = 0.5
+
+
+def _bands(image: np.ndarray, sigma: float) -> np.ndarray:
+    """``image`` blurred by ``sigma``, less its blur by 4 ``sigma`` (the
+    light's slow fall-off, which moves with the camera, taken out)."""
+    a = np.asarray(image, np.float32)
+    return cv2.GaussianBlur(a, (0, 0), sigma) - cv2.GaussianBlur(a, (0, 0), 4.0 * sigma)
+
+
+def _work_matrix(matrix, fx: float, fy: float) -> np.ndarray:
+    """A full-resolution 2x3 (or 3x3: a homography, kept 3x3) matrix as one
+    between working images (pixel centres: ``x_w = (x + 0.5) f - 0.5``)."""
+    m = np.asarray(matrix, float)
+    full = m if m.shape[0] == 3 else np.vstack([m[:2], [0.0, 0.0, 1.0]])
+    t = np.array([[fx, 0.0, 0.5 * fx - 0.5], [0.0, fy, 0.5 * fy - 0.5], [0.0, 0.0, 1.0]])
+    w = t @ full @ np.linalg.inv(t)
+    return w / w[2, 2] if m.shape[0] == 3 else w[:2]
+
+
+def _warp(a: np.ndarray, work: np.ndarray, size, flags) -> np.ndarray:
+    """``a`` warped by a 2x3 (affine) or 3x3 (homography) matrix."""
+    if work.shape[0] == 3:
+        return cv2.warpPerspective(a, work, size, flags=flags)
+    return cv2.warpAffine(a, work, size, flags=flags)
+
+
+def look_shift(prev: np.ndarray, cur: np.ndarray, work: np.ndarray, lag: int):
+    """Where the working image ``prev``, placed on ``cur`` by the 2x3
+    ``work``, looks most like it: ``(dx, dy, best, runner_up)``, the shift
+    (working px, within ``lag``) of the highest normalised correlation of
+    the two over their overlap (each shift its own overlap: Padfield's
+    masked correlation, by FFT, at half the resolution: the images are
+    blurred), that correlation, and the highest local maximum at least
+    :data:`MIN_LAG` px from it. None when no shift keeps enough overlap.
+    """
+    h, w = cur.shape
+    warped = _warp(prev.astype(np.float32), work, (w, h), cv2.INTER_LINEAR)
+    inside = _warp(np.ones(prev.shape, np.float32), work, (w, h), cv2.INTER_NEAREST)
+    half = lambda a: cv2.resize(a, (max(1, w // 2), max(1, h // 2)),  # noqa: E731
+                                interpolation=cv2.INTER_AREA)
+    f, mv, mm = half(np.asarray(cur, np.float32)), half(warped), (half(inside) > 0.99)
+    mm = mm.astype(np.float32)
+    f = f - np.float32(f.mean())          # (centred: the sums below lose fewer digits)
+    mv = (mv - np.float32(mv[mm > 0].mean() if mm.any() else 0.0)) * mm
+    shape = f.shape
+    F = lambda a: _spectrum(a.astype(np.float32), shape)  # noqa: E731
+    # the moving image shifted by t onto the fixed one (the fixed one whole)
+    Ff, Fff, Fmf = F(f), F(f * f), F(np.ones(shape, np.float32))
+    Fm, Fmm, Fmask = F(mv), F(mv * mv), F(mm)
+    n = _correlate(Fmf, Fmask)
+    sf, sm = _correlate(Ff, Fmask), _correlate(Fmf, Fm)
+    sff, smm, sfm = _correlate(Fff, Fmask), _correlate(Fmf, Fmm), _correlate(Ff, Fm)
+    L = max(1, lag // 2)
+    ys = np.r_[np.arange(0, L + 1), np.arange(-L, 0)] % n.shape[0]
+    xs = np.r_[np.arange(0, L + 1), np.arange(-L, 0)] % n.shape[1]
+    pick = lambda a: np.fft.fftshift(a[np.ix_(ys, xs)].astype(np.float64))  # noqa: E731
+    n, sf, sm, sff, smm, sfm = (pick(a) for a in (n, sf, sm, sff, smm, sfm))
+    enough = n >= 0.3 * float(mm.sum())
+    if not enough.any():
+        return None
+    nn = np.maximum(n, 1.0)
+    var = np.maximum((sff - sf * sf / nn) * (smm - sm * sm / nn), 1e-12)
+    ncc = np.where(enough, (sfm - sf * sm / nn) / np.sqrt(var), -1.0).astype(np.float32)
+    by, bx = np.unravel_index(int(np.argmax(ncc)), ncc.shape)
+    best = float(ncc[by, bx])
+    yy, xx = np.mgrid[:ncc.shape[0], :ncc.shape[1]]
+    peak = (ncc >= cv2.dilate(ncc, np.ones((3, 3), np.uint8))) & enough
+    peak &= np.hypot(yy - by, xx - bx) >= MIN_LAG / 2.0
+    second = float(ncc[peak].max()) if peak.any() else -1.0
+    return 2.0 * (bx - L), 2.0 * (by - L), best, second
+
+
+def resolve(m, res, pattern: Pattern, config: Config, decline: bool = True):
+    """A pair's answer ``m`` (a :class:`~.pair.PairMeasure`) over a repeated
+    texture: when the current frame has periods and the answer moved by one
+    of them fits its edges about as well (:func:`repeat_confidence`), the
+    frames' grey levels, correlated over shifts, choose the copy (tiles of
+    different shades, stains); the answer is moved there and refitted, its
+    confidence the correlation's margin over its next peak. When they do
+    not choose (:data:`MIN_LOOK_MARGIN`), the answer's confidence is what
+    its edges leave it (``decline``; else ``m`` stands: the dead reckoning,
+    whose prior and checks against the adjacent frame keep it among the
+    copies). ``m`` as it is otherwise.
+    """
+    feats = res.features if res is not None else None
+    if m is None or feats is None:
+        return m
+    g = feats.gradients
+    mat = np.asarray(m.matrix, float)[:2]
+    ox, oy = pattern.origin
+    x, y = g.to_work(mat[0, 0] * ox + mat[0, 1] * oy + mat[0, 2],
+                     mat[1, 0] * ox + mat[1, 1] * oy + mat[1, 2])
+    pose = Pose(float(mat[0, 0]), float(mat[0, 1]), float(x), float(y))
+    got = repeat_confidence(pattern, feats, res.factor, pose, config)
+    if got is None or got[1] >= m.confidence:
+        return m
+    prev = cv2.resize(pattern.image, None, fx=g.fx, fy=g.fy, interpolation=cv2.INTER_AREA)
+    # blurred over half the shortest period: the repeated lines (grout) fade,
+    # the coarser shading that tells the copies apart stays
+    period = float(np.hypot(*periods(g.magnitude, 1)[0]))
+    prev, cur = (_bands(a, max(1.0, LOOK_BLUR * period)) for a in (prev, g.image))
+    lag = int(LOOK_LAG * min(g.image.shape))
+    # (the homography where the pair has one: a camera that looks ahead)
+    hom = getattr(m, "homography", None)
+    look = look_shift(prev, cur, _work_matrix(mat if hom is None else hom, g.fx, g.fy), lag)
+    if look is None:
+        return replace(m, confidence=got[1]) if decline else m
+    dx, dy, best, second = look
+    margin = (best - second) / max(1e-9, 1.0 - second)
+    if margin < MIN_LOOK_MARGIN or best < MIN_LOOK:
+        return replace(m, confidence=got[1]) if decline else m
+    # the edges' copy: copies lie a period apart (a smaller shift is the blurred
+    # grey levels' own imprecision, or a camera's perspective)
+    if math.hypot(dx, dy) < 0.5 * period:
+        return replace(m, confidence=max(got[1], min(m.confidence, margin)))
+    pf = pattern.features(res.factor, config)
+    fit = refine(Pose(pose.a, pose.b, pose.tx + dx, pose.ty + dy), pf.vx, pf.vy, pf.vangle,
+                 feats.edges, feats.index, radii=(2.0, 1.5, 1.25), iterations=6,
+                 angle_tol=math.radians(config.angle_tolerance), either=pattern.either,
+                 score_radius=max(1.25, config.match_radius * res.factor))
+    if in_view(fit) < MIN_COPY * got[0]:    # not a copy the edges agree with
+        return replace(m, confidence=got[1]) if decline else m
+    q = fit.pose
+    fx, fy = g.to_full(q.tx, q.ty)
+    full = np.array([[q.a, q.b, 0.0], [-q.b, q.a, 0.0]])
+    full[:, 2] = [fx, fy] - full[:, :2] @ [ox, oy]
+    if hom is not None:   # (the homography moved by the same shift, in full-resolution px)
+        d = np.array([[1.0, 0.0, dx / g.fx], [0.0, 1.0, dy / g.fy], [0.0, 0.0, 1.0]])
+        hom = d @ np.asarray(hom, float)
+    return replace(m, matrix=full, confidence=margin, score=fit.score, homography=hom)
