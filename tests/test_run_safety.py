@@ -455,3 +455,35 @@ def test_odometry_csv_with_control_characters_in_names_stays_parseable(tmp_path)
     assert again.summary["resumed_rows"] == 5
     proc = cli("odometry", *names, "--out", tmp_path / "cli", "--no-mosaic", "--quiet")
     assert proc.returncode == 0 and len(proc.stdout.splitlines()) == 2, proc.stdout
+
+
+def _lock_again(path, q):
+    from seahough.errors import WriteError
+    from seahough.motion.runfiles import RunFolder
+    try:
+        RunFolder(path)
+        q.put("locked")
+    except WriteError as e:
+        q.put(str(e))
+
+
+def test_a_worker_that_starts_the_run_again_is_told_about_the_main_guard(tmp_path):
+    """A script without ``if __name__ == "__main__":`` runs its survey again in
+    each worker process (they import it): the worker found the folder held
+    by "another seahough run (process N)", N being its own parent. It is told
+    what to do instead."""
+    import multiprocessing
+
+    from seahough.motion.runfiles import RunFolder
+
+    held = RunFolder(tmp_path / "out")
+    try:
+        ctx = multiprocessing.get_context("spawn")
+        q = ctx.Queue()
+        p = ctx.Process(target=_lock_again, args=(str(tmp_path / "out"), q))
+        p.start()
+        msg = q.get(timeout=60)
+        p.join(timeout=60)
+    finally:
+        held.release()
+    assert "put the script's code under `if __name__ == \"__main__\":`" in msg, msg

@@ -205,7 +205,7 @@ def test_main_reports_sigterm_as_terminated_also_inside_compiled_code(raising_co
     one line, status 143, no traceback; an ignored SIGTERM stays ignored."""
     import signal
 
-    from seahough.cli import _Terminated, _catch_sigterm
+    from seahough.cli import _Terminated, _catch_signals
 
     inside = _Terminated()
     for _ in range(2):
@@ -222,9 +222,42 @@ def test_main_reports_sigterm_as_terminated_also_inside_compiled_code(raising_co
         assert err.startswith("seahough: error: terminated (SIGTERM)") and err.count("\n") == 1
     old = signal.signal(signal.SIGTERM, signal.SIG_IGN)
     try:
-        assert _catch_sigterm() is None and signal.getsignal(signal.SIGTERM) is signal.SIG_IGN
+        got = _catch_signals()
+        assert signal.SIGTERM not in got and signal.getsignal(signal.SIGTERM) is signal.SIG_IGN
     finally:
         signal.signal(signal.SIGTERM, old)
+        for sig, handler in got.items():
+            signal.signal(sig, handler)
+
+
+def test_an_interruption_sent_twice_does_not_interrupt_the_saving():
+    """``timeout -s INT`` signals the command, then its process group: the
+    command got SIGINT twice, and the second interrupted the first one's
+    saving (a survey's shard left as a .tmp, its images searched again; or
+    the cluster's shutdown hung). A repeat within _REPEAT_S is ignored: the
+    ``finally`` clause runs to its end."""
+    import os
+    import signal
+
+    from seahough.cli import _Terminated, _catch_signals
+
+    for first, second, kind in ((signal.SIGINT, signal.SIGINT, KeyboardInterrupt),
+                                (signal.SIGTERM, signal.SIGINT, _Terminated)):
+        old = _catch_signals()
+        saved = []
+        try:
+            with pytest.raises(kind):
+                try:
+                    os.kill(os.getpid(), first)
+                    time.sleep(1.0)                 # (the handler raises before this ends)
+                finally:
+                    os.kill(os.getpid(), second)    # the same interruption, again
+                    time.sleep(0.05)
+                    saved.append(True)              # the saving went on to its end
+            assert saved == [True]
+        finally:
+            for sig, handler in old.items():
+                signal.signal(sig, handler)
 
 
 def test_ctrl_c_during_detection_is_one_line_and_status_130(tmp_path):

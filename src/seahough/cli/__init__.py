@@ -19,6 +19,7 @@ import os
 import signal
 import sys
 import threading
+import time
 
 import click
 
@@ -146,21 +147,44 @@ _TERM_MESSAGE = ("terminated (SIGTERM); what was done is kept (a survey goes on 
                  "stopped when run again; seahough odometry: run it again with --resume)")
 
 
-def _on_sigterm(signum, frame):
-    raise _Terminated()
+#: A second interruption within this many seconds of the first is the same
+#: one sent twice (``timeout`` signals the command, then its process group)
+#: and is ignored while the first one's ``finally`` clauses save the work; a
+#: later one (Ctrl-C pressed again) stops at once.
+_REPEAT_S = 3.0
+_first_signal: list = []
 
 
-def _catch_sigterm():
-    """Install :func:`_on_sigterm` (main thread only); returns the old handler
-    (None: not installed)."""
+def _on_signal(signum, frame):
+    """SIGINT: KeyboardInterrupt; SIGTERM: :class:`_Terminated`. Only the
+    first: a repeat within :data:`_REPEAT_S` is ignored (it interrupted the
+    saving of a survey's shard: the work done was lost, or the cluster's
+    shutdown hung), a later one ends the process at once."""
+    now = time.monotonic()
+    if _first_signal:
+        if now - _first_signal[0] < _REPEAT_S:
+            return
+        _err("interrupted again: stopping at once (what was not yet saved is lost)")
+        os._exit(130 if signum == signal.SIGINT else 143)
+    _first_signal.append(now)
+    raise KeyboardInterrupt() if signum == signal.SIGINT else _Terminated()
+
+
+def _catch_signals() -> dict:
+    """Install :func:`_on_signal` for SIGINT and SIGTERM (main thread only;
+    a signal the caller ignores stays ignored); returns the old handlers."""
     if threading.current_thread() is not threading.main_thread():
-        return None
-    try:
-        if signal.getsignal(signal.SIGTERM) is signal.SIG_IGN:   # (the caller's choice)
-            return None
-        return signal.signal(signal.SIGTERM, _on_sigterm)
-    except (ValueError, OSError):   # pragma: no cover  (no signals here)
-        return None
+        return {}
+    _first_signal.clear()
+    old = {}
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        try:
+            if signal.getsignal(sig) is signal.SIG_IGN:   # (the caller's choice)
+                continue
+            old[sig] = signal.signal(sig, _on_signal)
+        except (ValueError, OSError):   # pragma: no cover  (no signals here)
+            pass
+    return old
 
 
 def main(argv=None) -> None:
@@ -179,12 +203,12 @@ def main(argv=None) -> None:
     ...     print("exit status", e.code)
     exit status 2
     """
-    old = _catch_sigterm()
+    old = _catch_signals()
     try:
         rv = _run(argv)
     finally:
-        if old is not None:
-            signal.signal(signal.SIGTERM, old)
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
     sys.exit(rv)
 
 

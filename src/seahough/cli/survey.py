@@ -110,7 +110,9 @@ def detect(pattern, inputs, out, workers, scheduler, batch_size, as_json, quiet,
     \b
     Exit status: 0 every image was searched (found or not: see the counts);
     1 some images could not be read (rows with status "error", the first
-    listed); 2 bad input (parameters, no images, --out, --scheduler).
+    listed); 2 bad input (parameters, no images, --out, --scheduler); 130
+    interrupted (Ctrl-C), 143 terminated (SIGTERM): the images searched are
+    kept, and the same command goes on where it stopped.
 
     \b
     Example:
@@ -212,7 +214,8 @@ def odometry(frames, out, workers, scheduler, chunk_size, as_json, quiet, **opts
 
     \b
     Exit status: 0 every pair was measured; 1 some frames are flagged;
-    2 bad input.
+    2 bad input; 130 interrupted (Ctrl-C), 143 terminated (SIGTERM): the
+    chunks done are kept, and the same command goes on where it stopped.
     """
     from .odometry import _bits, check_inputs, report
 

@@ -224,6 +224,13 @@ class RunFolder:
             os.close(self._fd)
             self._fd = None
             who = f" (process {pid})" if pid.isdigit() else ""
+            if pid.isdigit() and int(pid) == os.getppid():
+                # a worker process started by the run that holds the folder ran the
+                # script's own code again: a script without the __main__ guard
+                raise WriteError(
+                    f"{self.path}: a worker process of this run started the run again: "
+                    "put the script's code under `if __name__ == \"__main__\":` (worker "
+                    "processes import the script)") from None
             raise WriteError(f"{self.path}: another seahough run{who} is writing to this "
                              "folder; wait for it to end, or give another output folder") from None
         try:        # who holds it, for the message above (fixed width: no truncation)
