@@ -183,3 +183,26 @@ def test_crisp_marker_photo_has_long_borders():
     cv2.circle(img, (40, 40), 25, 255, -1)          # drawn without anti-aliasing
     assert P.from_image(img).has_long_borders()     # as its features see it: blurred
     assert not P.from_image(img).has_long_borders(seahough.Config(pattern_blur=0.0))
+
+
+def test_the_planes_shown_are_the_best_detections_pattern_and_ring_only_its_finds():
+    """SearchResult.planes of several patterns: the best detection's
+    pattern's (named by planes.pattern); the accumulator picture rings only
+    that pattern's detections (it ringed the others on planes they did not
+    vote in), and names the pattern in its panels' titles."""
+    from seahough.viz import plot_accumulator
+
+    img = _scene()
+    res = seahough.Detector(PATTERNS).search(img)
+    best = res.detections[0].pattern
+    assert res.planes is res.parts[best].planes and res.planes.pattern == best
+    assert res.features is res.parts[best].features
+    assert {d.pattern for d in res.detections} == {"box", "disc"}
+    fig = plot_accumulator(res.planes, res.detections)
+    labels = [t.get_text() for t in fig.axes[0].texts]
+    mine = [f"#{i + 1}" for i, d in enumerate(res.detections) if d.pattern == best]
+    assert sorted(labels) == sorted(mine)
+    assert fig.axes[0].get_title().startswith(f"{best} - ")
+    # one pattern: no name, every detection ringed
+    one = seahough.Detector(PATTERNS["box"]).search(img)
+    assert one.planes.pattern == ""

@@ -135,6 +135,25 @@ def test_plot_trajectory(tmp_path):
     assert cv2.imread(str(tmp_path / "none.png")).shape[:2] == (800, 900)
 
 
+def test_plot_trajectory_draws_a_runs_metres_in_the_unit_asked_for(tmp_path):
+    """A run's rows hold x, y in pixels and x_m, y_m in metres: unit="m"
+    draws the metres (it drew the pixels labelled as metres), "cm" the same
+    x 100; a run without metres refuses a metric unit; an assumed pose's
+    steps are not counted as travelled."""
+    rows = [{"x": 100.0 * i, "y": 0.0, "x_m": 0.25 * i, "y_m": 0.0, "heading": 0.0,
+             "flags": [], "status": "measured"} for i in range(4)]
+    result = types.SimpleNamespace(rows=rows)
+    title = lambda fig: fig.axes[0].get_title()  # noqa: E731
+    assert "0.8 m travelled" in title(plot.plot_trajectory(result, unit="m"))
+    assert "75.0 cm travelled" in title(plot.plot_trajectory(result, unit="cm"))
+    assert "300.0 px travelled" in title(plot.plot_trajectory(result))
+    with pytest.raises(seahough.ParameterError, match="unit='m': this run has no metric"):
+        plot.plot_trajectory(types.SimpleNamespace(rows=[dict(r, x_m=None, y_m=None)
+                                                         for r in rows]), unit="m")
+    rows[2].update(x=900.0, x_m=2.25, status="assumed", flags=["pose_assumed"])
+    assert "300.0 px travelled" in title(plot.plot_trajectory(rows))   # (1500 counted)
+
+
 def test_save_mosaic(tmp_path):
     mosaic = np.zeros((50, 80, 3), np.uint8)
     mosaic[10:40, 20:60] = (0, 200, 255)
@@ -166,6 +185,22 @@ def test_det_label_wraps_rounded_angles():
     line = types.SimpleNamespace(kind="line", score=0.9, confidence=0.8, scale=1.0, angle=0.0,
                                  line_angle=179.97, line_offset=2.0)
     assert " · line 0.0° · " in _det_label(line), _det_label(line)
+    # written as 0 degrees, the offset is measured along that direction's normal
+    assert _det_label(line).endswith("offset -2.0 px"), _det_label(line)
+
+
+def test_a_horizontal_band_is_a_line_at_0_degrees_above_or_below_the_centre():
+    """A band above the image centre: direction 0 (not 179.9999999999999),
+    offset negative (the normal (sin a, cos a) points down), scale 1 (the
+    line pattern is drawn by its area: cv2's anti-aliased fill made it
+    1.4 px wider, so a 10 px band was found at 0.88)."""
+    img = np.full((480, 640), 30, np.uint8)
+    img[200:210] = 230                       # centre row 204.5, image centre 239.5
+    d = seahough.Detector(seahough.Pattern.line(200, 10), (0.5, 2.0), (0.0, 180.0)).detect(img)[0]
+    assert d.line_angle == pytest.approx(0.0, abs=0.05) and d.line_angle < 179.0
+    assert d.line_offset == pytest.approx(-35.0, abs=0.3)
+    assert d.scale == pytest.approx(1.0, abs=0.02)
+    assert _det_label(d).endswith("offset -35.1 px") or _det_label(d).endswith("offset -35.0 px")
 
 
 def test_scale_angle_marker_sits_on_the_cell_it_refers_to():

@@ -188,6 +188,20 @@ def format_angle(degrees: float, decimals: int = 2, period: float = 360.0) -> st
     return f"{r + 0.0:.{decimals}f}"      # + 0.0: never "-0.00"
 
 
+def format_line(angle: float, offset: float, decimals: int = 2) -> tuple[str, float]:
+    """A line's direction as text in ``[0, 180)`` (:func:`format_angle`)
+    and its offset to show beside it: a direction that rounds up to 180 is
+    written 0, and the offset, measured along the normal
+    ``(sin a, cos a)``, which turns with it, changes sign.
+
+    >>> format_line(179.97, 35.0, 1), format_line(12.0, 35.0, 1)
+    (('0.0', -35.0), ('12.0', 35.0))
+    """
+    text = format_angle(angle, decimals, 180.0)
+    wrapped = math.isfinite(angle) and round(float(angle) % 180.0, decimals) >= 180.0
+    return text, (-float(offset) if wrapped else float(offset))
+
+
 def matrix_power(matrix, t: float) -> np.ndarray:
     """A similarity's 2x3 matrix applied ``t`` times (any real ``t``: roots
     too), taken exactly from its first column (:meth:`Similarity.from_columns`).

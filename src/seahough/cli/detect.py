@@ -15,7 +15,7 @@ import click
 from ..config import Config
 from ..core.detector import FLAG_ALONG_LINE, Detector
 from ..errors import SeahoughError
-from ..geometry import format_angle
+from ..geometry import format_angle, format_line
 from ..io.frames import printable
 from ._common import (CurveSearch, _Output, _dumps, _max_nfa_callback, _out_dir, _problem,
                       _progress, _range_callback, _table, bit_depth_option, default_workers,
@@ -45,6 +45,14 @@ def _curve_lines(curves) -> list[str]:
     return _table(rows, header)
 
 
+
+def _line_cells(d) -> tuple[str, str]:
+    """A line detection's direction and offset as the table shows them
+    (:func:`~seahough.geometry.format_line`: the offset's sign follows the
+    direction written)."""
+    angle, offset = format_line(d.line_angle, d.line_offset, 2)
+    return angle, f"{offset:.2f}"
+
 def _detection_lines(dets) -> list[str]:
     if dets and getattr(dets[0], "kind", None) == "curve":
         return _curve_lines(dets)
@@ -60,7 +68,7 @@ def _detection_lines(dets) -> list[str]:
     if dets and dets[0].kind == "line":
         header = ("#", "line_angle", "offset", "x", "y", "width_scale", "score", "conf", "nfa",
                   "flags")
-        rows = [(i + 1, format_angle(d.line_angle, 2, 180.0), f"{d.line_offset:.2f}",
+        rows = [(i + 1, *_line_cells(d),
                  f"{d.x:.2f}", f"{d.y:.2f}", f"{d.scale:.3f}", f"{d.score:.2f}",
                  f"{d.confidence:.2f}", _nfa_text(d.nfa),
                  ",".join(f for f in d.flags if f != FLAG_ALONG_LINE))

@@ -19,12 +19,15 @@ def _number(v) -> bool:
 
 
 def _path_length(rows) -> float:
-    """Length of the path through the rows' ``x, y`` (rows without a position skipped).
+    """Length of the path through the rows' ``x, y`` (rows without a position,
+    and assumed poses, skipped: the path joins the measured ones).
 
-    >>> _path_length([{"x": 0, "y": 0}, {"x": None, "y": None}, {"x": 3, "y": 4}])
+    >>> _path_length([{"x": 0, "y": 0}, {"x": None, "y": None}, {"x": 3, "y": 4},
+    ...               {"x": 9, "y": 4, "status": "assumed"}, {"x": 3, "y": 4}])
     5.0
     """
-    pts = np.array([[np.nan if r.get("x") is None else float(r["x"]),
+    pts = np.array([[np.nan if r.get("x") is None or r.get("status") == "assumed"
+                     else float(r["x"]),
                      np.nan if r.get("y") is None else float(r["y"])] for r in rows], float)
     pts = pts[np.all(np.isfinite(pts), axis=1)] if len(pts) else pts
     return float(np.hypot(*np.diff(pts, axis=0).T).sum()) if len(pts) > 1 else 0.0

@@ -27,11 +27,11 @@ from .features import Features, extract_features
 from .pattern import Pattern
 from .preprocess import choose_factor
 from .ranking import (FLAG_ALONG_LINE, FLAG_AMBIGUOUS, FLAG_OUTSIDE_RANGE, FLAG_PARTIAL,
-                      Detection, confidence, line_parameters, rank)
+                      FLAG_RANGE_EDGE, Detection, confidence, line_parameters, rank)
 
 __all__ = ["Detector", "SearchResult", "SEARCH_NOTES", "Detection", "confidence",
            "line_parameters", "FLAG_ALONG_LINE", "FLAG_AMBIGUOUS", "FLAG_OUTSIDE_RANGE",
-           "FLAG_PARTIAL"]
+           "FLAG_RANGE_EDGE", "FLAG_PARTIAL"]
 
 #: A texture pattern small in a large image: the key points taken put this
 #: many times its own voting points on its area (``Detector._n_keypoints``)
@@ -61,7 +61,8 @@ class SearchResult:
     may then be None. ``candidates`` are the refined candidate poses
     (:class:`~.candidates.Candidate`), best first. For a Detector of several
     patterns, ``parts`` holds each pattern's own result by name (``planes``
-    is then the first pattern's).
+    and ``features`` are then those of the best detection's pattern, or of
+    the first pattern when none is found; ``planes.pattern`` names it).
     """
 
     detections: list
@@ -406,7 +407,11 @@ class Detector:
         # the NFA means the same thing for every pattern: the strongest evidence first
         dets = sorted((d for r in results.values() for d in r.detections),
                       key=lambda d: (d.nfa if math.isfinite(d.nfa) else math.inf, -d.score))
-        first = next(iter(results.values()))
+        for name, r in results.items():
+            if r.planes is not None:
+                r.planes.pattern = name
+        # the planes and features shown: the best detection's pattern's (else the first's)
+        first = results[dets[0].pattern] if dets else next(iter(results.values()))
         notes = {r.note for r in results.values()}
         note = "" if "" in notes else first.note
         return SearchResult(dets, first.planes, first.features, first.factor,

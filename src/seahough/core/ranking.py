@@ -33,6 +33,11 @@ FLAG_AMBIGUOUS = "ambiguous"
 #: ranges (by more than 2 % or 1 degree): the object may be there at a size
 #: or turn that was not asked for.
 FLAG_OUTSIDE_RANGE = "outside_search_range"
+#: Flag when the scale or rotation lies at an end of the searched ranges
+#: (within 3 % or 1 degree): the object may be larger, smaller or turned
+#: further than searched, and only a part of it matched; widen the range
+#: to see.
+FLAG_RANGE_EDGE = "at_search_range_edge"
 #: A candidate's pose may move this share of the pattern's size to a shift
 #: more of its points agree on (:func:`_alternatives`).
 CAPTURE = 0.1
@@ -100,7 +105,7 @@ class Detection:
     score: float
     confidence: float
     matrix: np.ndarray
-    outline: list = field(default_factory=list)
+    outline: list = field(default_factory=list, repr=False)   # (polylines: long)
     votes: float = 0.0
     kind: str = "object"
     line_angle: float | None = None
@@ -151,6 +156,8 @@ def line_parameters(x: float, y: float, angle_deg: float, shape) -> tuple[float,
     h, w = shape[:2]
     cx, cy = (w - 1) / 2.0, (h - 1) / 2.0
     a = angle_deg % 180.0
+    if a > 180.0 - 1e-6:     # (179.9999999999999: 0, its normal turned with it)
+        a = 0.0
     t = math.radians(a)
     n = np.array([math.sin(t), math.cos(t)])    # normal
     off = float(n @ (np.array([x, y]) - [cx, cy]))
@@ -462,5 +469,7 @@ def to_detection(ctx: SearchContext, c: Candidate, conf: float, shape) -> Detect
         flags.append(FLAG_ALONG_LINE)
     if ctx.compare.outside_ranges(s, a):
         flags.append(FLAG_OUTSIDE_RANGE)
+    elif ctx.compare.at_range_edge(s, a):
+        flags.append(FLAG_RANGE_EDGE)
     return Detection(float(x), float(y), float(s), float(a), float(c.full.score), conf,
                      m, outline, c.votes, kind, la, lo, tuple(flags), c.evidence.nfa)

@@ -197,11 +197,13 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     scene's look changed). Flags (a frame with flags is a pair that could
     not be measured or a frame that could not be read; docs/odometry.md):
 
-    - ``unreadable: <reason>``: missing, corrupt, truncated, wrong size,
-      too small to measure (a side under 64 px), a broken link or a folder
-      among the frames, a video frame the decoder cannot give;
-      the row has no pose, the state is kept and the next readable frame is
-      measured against the keyframe across the gap.
+    - ``unreadable: <reason>``: corrupt, truncated, wrong size, too small
+      to measure (a side under 64 px), gone since the run started, a broken
+      link or a folder in a folder of frames, a video frame the decoder
+      cannot give; the row has no pose, the state is kept and the next
+      readable frame is measured against the keyframe across the gap. (A
+      path of a *list* of frames that is not there, a broken link or a
+      folder, is refused before the run starts: ParameterError.)
     - ``no_match`` (no pose of the reference frame was found in this one),
       ``low_confidence`` (one was found, but not distinct from its
       runner-up, or matching far worse than the last frames did),

@@ -274,9 +274,12 @@ class Totals:
         if r.get("ref") is not None:
             self.refs.add(r["ref"])
         if r.get("x") is not None:
-            if self.last_xy is not None:
-                self.length += math.hypot(r["x"] - self.last_xy[0], r["y"] - self.last_xy[1])
-            self.last_xy = (r["x"], r["y"])
+            # the path joins the measured poses (an assumed one, carried on
+            # from the last measured, would add motion that did not happen)
+            if r["status"] != "assumed":
+                if self.last_xy is not None:
+                    self.length += math.hypot(r["x"] - self.last_xy[0], r["y"] - self.last_xy[1])
+                self.last_xy = (r["x"], r["y"])
             self.end = {"index": r["index"], "x": r["x"], "y": r["y"],
                         "heading": r["heading"], "scale": r["scale"], "x_m": r.get("x_m"),
                         "y_m": r.get("y_m")}
@@ -289,9 +292,9 @@ def plot_track(csv_path, path: Path, metric: bool):
     """The trajectory picture; only the columns drawn are read back from the CSV."""
     from ..viz import plot_trajectory
 
-    kx, ky = ("x_m", "y_m") if metric else ("x", "y")
-    plot_rows = [{"x": r.get(kx), "y": r.get(ky), "heading": r.get("heading"),
-                  "flags": r.get("flags"), "status": r.get("status")}
+    plot_rows = [{"x": r.get("x"), "y": r.get("y"), "x_m": r.get("x_m"), "y_m": r.get("y_m"),
+                  "heading": r.get("heading"), "flags": r.get("flags"),
+                  "status": r.get("status")}
                  for r in iter_odometry_csv(csv_path)]
     plot_trajectory(plot_rows, path, unit="m" if metric else "px")
     return path

@@ -169,6 +169,15 @@ def _imshow(ax, a: np.ndarray, box_wh=None, *, extent=None, **kw):
     return ax.imshow(a, extent=extent, **kw)
 
 
+def _pattern_picture(pattern) -> tuple[np.ndarray, dict]:
+    """A pattern made from an image as :func:`_imshow` draws it, and how:
+    a colour one in its colours (RGB), a grey one in grey levels."""
+    bgr = getattr(pattern, "_colour", None)
+    if bgr is not None:
+        return np.clip(np.asarray(bgr, np.float32)[:, :, 2::-1], 0, 255).astype(np.uint8), {}
+    return pattern.image, {"cmap": "gray", "vmin": 0, "vmax": 255}
+
+
 def _show(ax, disp: np.ndarray, colour: bool, box_wh=None) -> None:
     """Draw an image from :func:`_as_display` filling ``ax`` (a box of
     ``box_wh`` px: see :func:`_imshow`), pixel centres at integer

@@ -174,6 +174,10 @@ def plot_accumulator(planes, detections=(), path=None, *, title=None, note=None)
         ``SearchResult.planes`` from :meth:`seahough.Detector.search`; None
         (the search stopped before voting) draws a note instead.
     detections : list of Detection
+        Ringed and numbered in list order; of a search of several
+        patterns, only those of the planes' pattern (``planes.pattern``,
+        named in the panels' titles) are drawn, with their numbers in the
+        whole list.
     path : str or Path, optional
         Where to save the PNG.
     title : str, optional
@@ -248,7 +252,13 @@ def plot_accumulator(planes, detections=(), path=None, *, title=None, note=None)
     ax2.set_ylim(s_edges[0], s_edges[-1])
 
     marks1, marks2 = [], []
-    for i, d in enumerate(detections):
+    name = getattr(planes, "pattern", "")
+    if name:   # (several patterns: only this one's detections are in these planes)
+        ax1.set_title(f"{name} - " + ax1.get_title(), fontsize=11)
+        ax2.set_title(f"{name} - " + ax2.get_title(), fontsize=11)
+    shown = [(i, d) for i, d in enumerate(detections)
+             if not name or getattr(d, "pattern", name) == name]
+    for i, d in shown:
         c = COLOURS[i % len(COLOURS)]
         a, sc = scale_angle_marker(planes, d.scale, d.angle)
         for ax, marks, px, py in ((ax1, marks1, d.x, d.y), (ax2, marks2, a, sc)):
@@ -256,7 +266,7 @@ def plot_accumulator(planes, detections=(), path=None, *, title=None, note=None)
             marks.append((f"#{i + 1}", px, py, c))
     _place_peak_labels(ax1, marks1)
     _place_peak_labels(ax2, marks2)
-    if not detections and xy.size and xy.max() > 0:
+    if not shown and xy.size and xy.max() > 0:
         r, c = np.unravel_index(int(np.argmax(xy)), xy.shape)
         ax1.plot([planes.x[c]], [planes.y[r]], "x", ms=14, mew=2.5, color="white")
         ax1.annotate("highest peak (rejected)", (planes.x[c], planes.y[r]), xytext=(10, 8),

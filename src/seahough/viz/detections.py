@@ -15,9 +15,9 @@ from matplotlib.path import Path as MplPath
 
 from ..config import Config
 from ..errors import ParameterError
-from ..geometry import format_angle
+from ..geometry import format_angle, format_line
 from ._figure import COLOURS, DPI, _OUTLINE, _TEXT_OUTLINE, _as_display, _figure, _finish, \
-    _imshow, _line_ends, _line_extent, _show, _text_size
+    _imshow, _line_ends, _line_extent, _pattern_picture, _show, _text_size
 
 _IMAGE_BOX = 900        # longer side of an image drawn by plot_detections, px
 _MARGINS = (75, 25, 45, 55)   # left, right, bottom, top margins around it, px
@@ -163,9 +163,9 @@ def _det_label(d) -> str:
     if name:
         return f"{name} · " + _det_label(type(d)(**{**d.__dict__, "pattern": ""}))
     if d.kind == "line" and d.line_angle is not None:
+        angle, offset = format_line(d.line_angle, d.line_offset, 1)
         return (f"score {d.score:.2f} · conf {d.confidence:.2f} · "
-                f"line {format_angle(d.line_angle, 1, 180.0)}° · "
-                f"offset {d.line_offset:+.1f} px")
+                f"line {angle}° · offset {offset:+.1f} px")
     return (f"score {d.score:.2f} · conf {d.confidence:.2f} · s {d.scale:.2f} · "
             f"{format_angle(d.angle, 1)}°")
 
@@ -299,7 +299,8 @@ def _draw_pattern(ins, pattern, box_px):
         ins.add_patch(PathPatch(_shape_path(pattern), fc=(1, 1, 1, 0.45), ec="none"))
         lines = [np.asarray(o, float).reshape(-1, 2) for o in pattern.outline]
     else:
-        _imshow(ins, pattern.image, box_px, cmap="gray", vmin=0, vmax=255)
+        picture, kw = _pattern_picture(pattern)
+        _imshow(ins, picture, box_px, **kw)
         lines = [] if _is_border(pattern.outline, pw, ph) else \
             [np.asarray(o, float).reshape(-1, 2) for o in pattern.outline]
     for o in lines:

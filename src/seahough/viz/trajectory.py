@@ -43,6 +43,26 @@ def _assumed(row) -> bool:
     return any("pose_assumed" in str(f) for f in flags)
 
 
+#: Metric units of :func:`plot_trajectory`: how many to a metre.
+_PER_METRE = {"m": 1.0, "cm": 100.0, "mm": 1000.0}
+
+
+def _positions(rows, unit: str, is_result: bool):
+    """The rows' positions (NaN where missing) in ``unit``: ``x_m, y_m``
+    for a metric unit when the rows have them."""
+    per = _PER_METRE.get(unit)
+    metric = per is not None and any(r.get("x_m") is not None for r in rows)
+    if per is not None and not metric and is_result and rows:
+        from ..errors import ParameterError
+        raise ParameterError(f"unit={unit!r}: this run has no metric positions (x_m, y_m); "
+                             "give run_odometry metres_per_pixel, or altitude and focal_px, "
+                             "or draw it in px")
+    kx, ky, k = ("x_m", "y_m", per) if metric else ("x", "y", 1.0)
+    xs = np.array([_num(r.get(kx)) for r in rows], float) * k
+    ys = np.array([_num(r.get(ky)) for r in rows], float) * k
+    return xs, ys
+
+
 def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=None) -> Figure:
     """The dead-reckoned path seen from above.
 
@@ -55,7 +75,11 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
     path : str or Path, optional
         Where to save the PNG.
     unit : str
-        Unit of ``x``, ``y`` for the axis labels (``"px"``, ``"m"``).
+        ``"px"``: ``x``, ``y`` are drawn. ``"m"``, ``"cm"`` or ``"mm"``: rows
+        with ``x_m``, ``y_m`` (a metric run: ``run_odometry`` with metres per
+        pixel, or altitude and focal length) are drawn from those, in that
+        unit; rows without them are taken as already in it (a run without
+        them: ParameterError). Any other unit labels ``x``, ``y`` as given.
     truth : (N, 2) array, optional
         The true positions: a wide light grey band with a ring at each
         position, under the estimate (the estimate shows inside the band
@@ -64,7 +88,9 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
 
     Notes
     -----
-    The start is a green circle, the end a black square; frames whose pose
+    The distance travelled in the title sums the steps between frames whose
+    pose was measured (an assumed pose, carried on from the last measured
+    one, would add motion that did not happen). The start is a green circle, the end a black square; frames whose pose
     is assumed (status ``"assumed"`` or a ``pose_assumed`` flag: the motion
     of their pair could not be measured and was carried on from the last
     measured one) are hollow red circles, "pose assumed" in the legend;
@@ -85,20 +111,21 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
     ...         {"x": 9.0, "y": -12.0, "heading": None, "status": "assumed",
     ...          "flags": "no_match; pose_assumed: constant velocity since frame 1"}]
     >>> fig = plot_trajectory(rows, unit="m")   # path=...: also a PNG
-    >>> fig.axes[0].get_title()
-    'dead-reckoned path: 4 frames, 15.0 m travelled, 2 flagged'
+    >>> fig.axes[0].get_title()   # (the assumed pose's step not counted)
+    'dead-reckoned path: 4 frames, 10.0 m travelled, 2 flagged'
     >>> [t.get_text() for t in fig.axes[0].get_legend().get_texts()][-3:]
     ['flagged (1)', 'pose assumed (1)', 'heading']
     >>> tuple(int(v) for v in fig.get_size_inches() * fig.dpi)
     (900, 800)
     """
     rows = _rows_of(rows_or_result)
+    xs, ys = _positions(rows, unit, is_result=hasattr(rows_or_result, "rows"))
     fig = _figure(900, 800)
     ax = fig.add_axes([0.1, 0.08, 0.86, 0.84])
-    xs = np.array([_num(r.get("x")) for r in rows], float)
-    ys = np.array([_num(r.get("y")) for r in rows], float)
     ok = np.isfinite(xs) & np.isfinite(ys)
-    dist = float(np.hypot(np.diff(xs[ok]), np.diff(ys[ok])).sum())
+    guessed = np.array([_assumed(r) for r in rows], bool) & ok
+    known = ok & ~guessed
+    dist = float(np.hypot(np.diff(xs[known]), np.diff(ys[known])).sum())
     flagged = np.array([bool(r.get("flags")) for r in rows], bool)
     if truth is not None:
         t = np.asarray(truth, float).reshape(-1, 2)
@@ -115,7 +142,6 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
         i0 = int(np.flatnonzero(ok)[0]); i1 = int(np.flatnonzero(ok)[-1])
         ax.plot(xs[i0], ys[i0], "o", ms=12, color="#1aa442", mec="black", label="start", zorder=4)
         ax.plot(xs[i1], ys[i1], "s", ms=11, color="black", label="end", zorder=4)
-        guessed = np.array([_assumed(r) for r in rows], bool) & ok
         bad = flagged & ok & ~guessed
         if bad.any():
             ax.plot(xs[bad], ys[bad], "x", ms=11, mew=2.5, color="#e0001b",
