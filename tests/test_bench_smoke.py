@@ -298,6 +298,15 @@ def test_keyframes_benchmark_quick(tmp_path):
     assert all(0 < v < 1 for v in steps)
 
 
+def test_tiled_floor_benchmark_quick(tmp_path):
+    """bench/bench_tiled_floor.py --quick: the dev floor's first 4 pairs, the
+    three methods, none of seahough's answers wrong (procedural: no data needed)."""
+    text = _quick_page(ROOT / "bench" / "bench_tiled_floor.py", tmp_path / "tiled.md")
+    rows = [r for r in _rows(text) if r[0] == "all"]
+    assert [r[1] for r in rows] == ["seahough", "SIFT+RANSAC", "ORB+RANSAC"]
+    assert rows[0][2] == "4" and rows[0][5] == "0" and int(rows[0][4]) >= 3
+
+
 def test_real_pairs_reference_rule():
     """The reference of two fits is their mean where their corners agree within
     0.5 % of the diagonal, none otherwise; the KLT fit recovers a known motion."""

@@ -164,8 +164,11 @@ def _on_signal(signum, frame):
     if _first_signal:
         if now - _first_signal[0] < _REPEAT_S:
             return
-        _err("interrupted again: stopping at once (what was not yet saved is lost)")
-        os._exit(130 if signum == signal.SIGINT else 143)
+        try:   # (not click.echo: stderr may be mid-write, or a closed pipe)
+            os.write(2, b"seahough: error: interrupted again: stopping at once (what was not "
+                        b"yet saved is lost)\n")
+        finally:
+            os._exit(130 if signum == signal.SIGINT else 143)
     _first_signal.append(now)
     raise KeyboardInterrupt() if signum == signal.SIGINT else _Terminated()
 

@@ -45,13 +45,13 @@ def _curve_lines(curves) -> list[str]:
     return _table(rows, header)
 
 
-
 def _line_cells(d) -> tuple[str, str]:
     """A line detection's direction and offset as the table shows them
     (:func:`~seahough.geometry.format_line`: the offset's sign follows the
     direction written)."""
     angle, offset = format_line(d.line_angle, d.line_offset, 2)
     return angle, f"{offset:.2f}"
+
 
 def _detection_lines(dets) -> list[str]:
     if dets and getattr(dets[0], "kind", None) == "curve":

@@ -113,12 +113,12 @@ class PoseComparison:
     def at_range_edge(self, scale: float, angle: float) -> bool:
         """Is a pose within the searched ranges' slack of one of their ends
         (scale within 3 %, angle within 1 degree; a range too narrow to
-        have ends, e.g. a known scale, has none)? The object may then be
+        have ends, under 1.5x or 2 degrees, e.g. a known scale, has none)? The object may then be
         larger, smaller or turned further than searched, and only a part
         of it fitted (a box 3 times the pattern, searched up to 2: a
         corner-hugging copy at 1.95)."""
         s0, s1 = self.scale_range
-        if s1 >= 1.1 * s0 and (scale <= s0 * 1.03 or scale >= s1 / 1.03):
+        if s1 >= 1.5 * s0 and (scale <= s0 * 1.03 or scale >= s1 / 1.03):
             return True
         a0, a1 = self.angle_range
         period = 180.0 if self.pattern.is_line else 360.0

@@ -340,7 +340,8 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
     prediction has no runner-up worth the name (its look-alikes lie outside).
     ``tiles``: an answer the similarity vouches for is measured tile by tile
     too, for its parallax and homography only (its figures stay the
-    similarity's).
+    similarity's). Every answer is checked for a repeated texture's copies
+    (:func:`~.repeats.resolve`; declined only when ``decline_repeats``).
 
     When the vote's runner-up is too close for the tile check (a repeated
     texture, a camera that looks ahead), the pair is measured coarse to fine
@@ -379,8 +380,8 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
     d = res.detections[0] if res.detections else None
     # a repeated texture's look-alikes (repeats.py; not around a prediction:
     # the copy nearest it is the answer)
-    done = (lambda m: resolve(m, res, pattern, config, decline_repeats)) if rescue else (
-        lambda m: m)
+    done = (lambda m: resolve(m, res, pattern, config, decline_repeats, region)) if rescue \
+        else (lambda m: m)
     # the similarity's own answer (None: the search found none)
     own = None if d is None else PairMeasure(np.asarray(d.matrix, float), d.confidence,
                                               d.score, d.nfa)

@@ -74,9 +74,14 @@ def periods(magnitude: np.ndarray, n: int = N_PERIODS, min_lag: float = MIN_LAG)
     [(0, 12), (16, 0)]
     """
     m = np.asarray(magnitude, np.float32)
-    if min(m.shape) >= 2 * HALF_FROM:   # at half resolution (a quarter of the time)
+    if min(m.shape) >= 2 * HALF_FROM:   # at half resolution (a quarter of the time), once
         half = cv2.resize(m, (m.shape[1] // 2, m.shape[0] // 2), interpolation=cv2.INTER_AREA)
-        return 2.0 * periods(half, n, 0.75 * min_lag)   # (6 px: a 16 px tile at 0.5)
+        return 2.0 * _periods(half, n, 0.75 * min_lag)   # (6 px: a 16 px tile at 0.5)
+    return _periods(m, n, min_lag)
+
+
+def _periods(m: np.ndarray, n: int, min_lag: float) -> np.ndarray:
+    """:func:`periods` of a float32 image at its own resolution."""
     h, w = m.shape
     spec = _spectrum(m - np.float32(m.mean()), (h, w))
     ac = _correlate(spec, spec)
@@ -88,10 +93,13 @@ def periods(magnitude: np.ndarray, n: int = N_PERIODS, min_lag: float = MIN_LAG)
     xs = np.r_[np.arange(0, lx + 1), np.arange(-lx, 0)]
     win = ac[np.ix_(ys % ac.shape[0], xs % ac.shape[1])].astype(np.float64)
     overlap = np.outer(h - np.abs(ys), w - np.abs(xs)) / float(h * w)
-    win = np.fft.fftshift(win / overlap / ac[0, 0])
+    # (float32 throughout: a peak compared with its own value rounded would be lost)
+    win = np.fft.fftshift(win / overlap / ac[0, 0]).astype(np.float32)
     dy, dx = np.mgrid[-ly:ly + 1, -lx:lx + 1]
     near = np.hypot(dx, dy) < min_lag
-    peak = (win >= cv2.dilate(win.astype(np.float32), np.ones((3, 3), np.uint8))) & ~near
+    # (not on the window's border: still rising there, not a peak)
+    inner = (np.abs(dy) < ly) & (np.abs(dx) < lx)
+    peak = (win >= cv2.dilate(win, np.ones((3, 3), np.uint8))) & ~near & inner
     peak &= win >= MIN_PERIODIC
     # one of v, -v (the autocorrelation is symmetric): dy > 0, or dy == 0 and dx > 0
     peak &= (dy > 0) | ((dy == 0) & (dx > 0))
@@ -182,8 +190,8 @@ def _warp(a: np.ndarray, work: np.ndarray, size, flags) -> np.ndarray:
 
 
 def look_shift(prev: np.ndarray, cur: np.ndarray, work: np.ndarray, lag: int):
-    """Where the working image ``prev``, placed on ``cur`` by the 2x3
-    ``work``, looks most like it: ``(dx, dy, best, runner_up)``, the shift
+    """Where the working image ``prev``, placed on ``cur`` by ``work`` (2x3
+    affine or 3x3 homography), looks most like it: ``(dx, dy, best, runner_up)``, the shift
     (working px, within ``lag``) of the highest normalised correlation of
     the two over their overlap (each shift its own overlap: Padfield's
     masked correlation, by FFT, at half the resolution: the images are
@@ -212,12 +220,18 @@ def look_shift(prev: np.ndarray, cur: np.ndarray, work: np.ndarray, lag: int):
     xs = np.r_[np.arange(0, L + 1), np.arange(-L, 0)] % n.shape[1]
     pick = lambda a: np.fft.fftshift(a[np.ix_(ys, xs)].astype(np.float64))  # noqa: E731
     n, sf, sm, sff, smm, sfm = (pick(a) for a in (n, sf, sm, sff, smm, sfm))
-    enough = n >= 0.3 * float(mm.sum())
-    if not enough.any():
+    if not mm.any():
         return None
     nn = np.maximum(n, 1.0)
-    var = np.maximum((sff - sf * sf / nn) * (smm - sm * sm / nn), 1e-12)
-    ncc = np.where(enough, (sfm - sf * sm / nn) / np.sqrt(var), -1.0).astype(np.float32)
+    vf, vm = sff - sf * sf / nn, smm - sm * sm / nn
+    # enough overlap, and texture in it on both sides (a flat overlap's
+    # correlation is noise over nothing: it blew up past 1)
+    enough = (n >= 0.3 * float(mm.sum())) & (vf > 1e-6 * max(float(vf.max()), 1e-12)) \
+        & (vm > 1e-6 * max(float(vm.max()), 1e-12))
+    if not enough.any():
+        return None
+    ncc = np.where(enough, (sfm - sf * sm / nn) / np.sqrt(np.maximum(vf * vm, 1e-30)), -1.0)
+    ncc = np.clip(ncc, -1.0, 1.0).astype(np.float32)
     by, bx = np.unravel_index(int(np.argmax(ncc)), ncc.shape)
     best = float(ncc[by, bx])
     yy, xx = np.mgrid[:ncc.shape[0], :ncc.shape[1]]
@@ -227,7 +241,7 @@ def look_shift(prev: np.ndarray, cur: np.ndarray, work: np.ndarray, lag: int):
     return 2.0 * (bx - L), 2.0 * (by - L), best, second
 
 
-def resolve(m, res, pattern: Pattern, config: Config, decline: bool = True):
+def resolve(m, res, pattern: Pattern, config: Config, decline: bool = True, region=None):
     """A pair's answer ``m`` (a :class:`~.pair.PairMeasure`) over a repeated
     texture: when the current frame has periods and the answer moved by one
     of them fits its edges about as well (:func:`repeat_confidence`), the
@@ -237,7 +251,9 @@ def resolve(m, res, pattern: Pattern, config: Config, decline: bool = True):
     not choose (:data:`MIN_LOOK_MARGIN`), the answer's confidence is what
     its edges leave it (``decline``; else ``m`` stands: the dead reckoning,
     whose prior and checks against the adjacent frame keep it among the
-    copies). ``m`` as it is otherwise.
+    copies). A copy whose origin falls outside ``region`` (x0, y0, x1, y1,
+    full-resolution px: the search's) is not one the search looked for.
+    ``m`` as it is otherwise.
     """
     feats = res.features if res is not None else None
     if m is None or feats is None:
@@ -263,7 +279,7 @@ def resolve(m, res, pattern: Pattern, config: Config, decline: bool = True):
     if look is None:
         return replace(m, confidence=got[1]) if decline else m
     dx, dy, best, second = look
-    margin = (best - second) / max(1e-9, 1.0 - second)
+    margin = float(np.clip((best - second) / max(1e-9, 1.0 - second), 0.0, 1.0))
     if margin < MIN_LOOK_MARGIN or best < MIN_LOOK:
         return replace(m, confidence=got[1]) if decline else m
     # the edges' copy: copies lie a period apart (a smaller shift is the blurred
@@ -278,10 +294,13 @@ def resolve(m, res, pattern: Pattern, config: Config, decline: bool = True):
     if in_view(fit) < MIN_COPY * got[0]:    # not a copy the edges agree with
         return replace(m, confidence=got[1]) if decline else m
     q = fit.pose
-    fx, fy = g.to_full(q.tx, q.ty)
+    fx, fy = (float(v) for v in g.to_full(q.tx, q.ty))
+    if region is not None and not (region[0] <= fx <= region[2] and region[1] <= fy <= region[3]):
+        return replace(m, confidence=got[1]) if decline else m
     full = np.array([[q.a, q.b, 0.0], [-q.b, q.a, 0.0]])
     full[:, 2] = [fx, fy] - full[:, :2] @ [ox, oy]
-    if hom is not None:   # (the homography moved by the same shift, in full-resolution px)
-        d = np.array([[1.0, 0.0, dx / g.fx], [0.0, 1.0, dy / g.fy], [0.0, 0.0, 1.0]])
+    if hom is not None:   # (the homography moved as the origin was, full-resolution px)
+        x0, y0 = mat @ [ox, oy, 1.0]
+        d = np.array([[1.0, 0.0, fx - x0], [0.0, 1.0, fy - y0], [0.0, 0.0, 1.0]])
         hom = d @ np.asarray(hom, float)
     return replace(m, matrix=full, confidence=margin, score=fit.score, homography=hom)
