@@ -280,12 +280,17 @@ def resolve(m, res, pattern: Pattern, config: Config, decline: bool = True, regi
         return replace(m, confidence=got[1]) if decline else m
     dx, dy, best, second = look
     margin = float(np.clip((best - second) / max(1e-9, 1.0 - second), 0.0, 1.0))
-    if margin < MIN_LOOK_MARGIN or best < MIN_LOOK:
+    if margin < MIN_LOOK_MARGIN:
         return replace(m, confidence=got[1]) if decline else m
     # the edges' copy: copies lie a period apart (a smaller shift is the blurred
-    # grey levels' own imprecision, or a camera's perspective)
+    # grey levels' own imprecision, or a camera's perspective). The grey levels
+    # confirm it, however well they correlate (two frames of a camera that looks
+    # ahead correlate at 0.75-0.79, their next peak at 0.33); another copy needs
+    # MIN_LOOK
     if math.hypot(dx, dy) < 0.5 * period:
         return replace(m, confidence=max(got[1], min(m.confidence, margin)))
+    if best < MIN_LOOK:
+        return replace(m, confidence=got[1]) if decline else m
     pf = pattern.features(res.factor, config)
     fit = refine(Pose(pose.a, pose.b, pose.tx + dx, pose.ty + dy), pf.vx, pf.vy, pf.vangle,
                  feats.edges, feats.index, radii=(2.0, 1.5, 1.25), iterations=6,
