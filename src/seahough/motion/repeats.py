@@ -121,31 +121,35 @@ def in_view(fit) -> float:
 
 
 def repeat_confidence(pattern: Pattern, features: Features, factor: float, pose: Pose,
-                      config: Config) -> tuple[float, float] | None:
-    """(best score, the confidence it leaves) of the working-scale ``pose``
-    against itself moved by each period of the current frame
-    (:func:`periods` of ``features``' gradient magnitude) and refitted
-    (scale and rotation kept): ``confidence(score, r)`` with ``r`` the best
-    score of the moved poses, scores of the points in view
-    (:func:`in_view`). None: the frame has no period.
+                      config: Config) -> tuple[float, float, np.ndarray] | None:
+    """(best score, the confidence it leaves, the periods) of the
+    working-scale ``pose`` against itself moved by each period of the
+    current frame (:func:`periods` of ``features``' gradient magnitude) and
+    refitted (scale and rotation kept): ``confidence(score, r)`` with ``r``
+    the best score of the moved poses, scores of the points in view
+    (:func:`in_view`), on all the pattern's scoring points (on the
+    refinement's subset, a third of the time, one tiled floor's copy fitted
+    less well than the answer and a pair was answered a tile off). None:
+    the frame has no period.
     """
     shifts = periods(features.gradients.magnitude)
     if not len(shifts):
         return None
     pf = pattern.features(factor, config)
+    vx, vy, va = pf.vx, pf.vy, pf.vangle
     tol = math.radians(config.angle_tolerance)
     score_r = max(1.25, config.match_radius * factor)
 
     def fit(p):   # (the share of the points in view: a shift moves some out)
-        f = refine(p, pf.vx, pf.vy, pf.vangle, features.edges, features.index,
+        f = refine(p, vx, vy, va, features.edges, features.index,
                    radii=(2.0, 1.25), iterations=4, angle_tol=tol, either=pattern.either,
                    fix_scale=True, fix_angle=True, score_radius=score_r)
         return in_view(f)
 
     best = fit(pose)
-    r = max(fit(Pose(pose.a, pose.b, pose.tx + s * vx, pose.ty + s * vy))
-            for vx, vy in shifts for s in (1.0, -1.0))
-    return best, confidence(best, r)
+    r = max(fit(Pose(pose.a, pose.b, pose.tx + s * dx, pose.ty + s * dy))
+            for dx, dy in shifts for s in (1.0, -1.0))
+    return best, confidence(best, r), shifts
 
 
 
@@ -270,7 +274,7 @@ def resolve(m, res, pattern: Pattern, config: Config, decline: bool = True, regi
     prev = cv2.resize(pattern.image, None, fx=g.fx, fy=g.fy, interpolation=cv2.INTER_AREA)
     # blurred over half the shortest period: the repeated lines (grout) fade,
     # the coarser shading that tells the copies apart stays
-    period = float(np.hypot(*periods(g.magnitude, 1)[0]))
+    period = float(np.hypot(*got[2][0]))      # (the shortest: they are sorted so)
     prev, cur = (_bands(a, max(1.0, LOOK_BLUR * period)) for a in (prev, g.image))
     lag = int(LOOK_LAG * min(g.image.shape))
     # (the homography where the pair has one: a camera that looks ahead)
