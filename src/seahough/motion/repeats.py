@@ -27,6 +27,7 @@ from ..core.features import Features
 from ..core.pattern import Pattern
 from ..core.ranking import confidence
 from ..core.refine import Pose, refine
+from .parallax import work_matrix
 
 #: Periods are looked for up to this share of the frame's width and height.
 MAX_LAG = 0.25
@@ -176,26 +177,9 @@ def _bands(image: np.ndarray, sigma: float) -> np.ndarray:
     return cv2.GaussianBlur(a, (0, 0), sigma) - cv2.GaussianBlur(a, (0, 0), 4.0 * sigma)
 
 
-def _work_matrix(matrix, fx: float, fy: float) -> np.ndarray:
-    """A full-resolution 2x3 (or 3x3: a homography, kept 3x3) matrix as one
-    between working images (pixel centres: ``x_w = (x + 0.5) f - 0.5``)."""
-    m = np.asarray(matrix, float)
-    full = m if m.shape[0] == 3 else np.vstack([m[:2], [0.0, 0.0, 1.0]])
-    t = np.array([[fx, 0.0, 0.5 * fx - 0.5], [0.0, fy, 0.5 * fy - 0.5], [0.0, 0.0, 1.0]])
-    w = t @ full @ np.linalg.inv(t)
-    return w / w[2, 2] if m.shape[0] == 3 else w[:2]
-
-
-def _warp(a: np.ndarray, work: np.ndarray, size, flags) -> np.ndarray:
-    """``a`` warped by a 2x3 (affine) or 3x3 (homography) matrix."""
-    if work.shape[0] == 3:
-        return cv2.warpPerspective(a, work, size, flags=flags)
-    return cv2.warpAffine(a, work, size, flags=flags)
-
-
 def look_shift(prev: np.ndarray, cur: np.ndarray, work: np.ndarray, lag: int):
-    """Where the working image ``prev``, placed on ``cur`` by ``work`` (2x3
-    affine or 3x3 homography), looks most like it: ``(dx, dy, best, runner_up)``, the shift
+    """Where the working image ``prev``, placed on ``cur`` by ``work`` (3x3,
+    :func:`~.parallax.work_matrix`), looks most like it: ``(dx, dy, best, runner_up)``, the shift
     (working px, within ``lag``) of the highest normalised correlation of
     the two over their overlap (each shift its own overlap: Padfield's
     masked correlation, by FFT, at half the resolution: the images are
@@ -203,8 +187,9 @@ def look_shift(prev: np.ndarray, cur: np.ndarray, work: np.ndarray, lag: int):
     :data:`MIN_LAG` px from it. None when no shift keeps enough overlap.
     """
     h, w = cur.shape
-    warped = _warp(prev.astype(np.float32), work, (w, h), cv2.INTER_LINEAR)
-    inside = _warp(np.ones(prev.shape, np.float32), work, (w, h), cv2.INTER_NEAREST)
+    warped = cv2.warpPerspective(prev.astype(np.float32), work, (w, h), flags=cv2.INTER_LINEAR)
+    inside = cv2.warpPerspective(np.ones(prev.shape, np.float32), work, (w, h),
+                                 flags=cv2.INTER_NEAREST)
     half = lambda a: cv2.resize(a, (max(1, w // 2), max(1, h // 2)),  # noqa: E731
                                 interpolation=cv2.INTER_AREA)
     f, mv, mm = half(np.asarray(cur, np.float32)), half(warped), (half(inside) > 0.99)
@@ -279,7 +264,7 @@ def resolve(m, res, pattern: Pattern, config: Config, decline: bool = True, regi
     lag = int(LOOK_LAG * min(g.image.shape))
     # (the homography where the pair has one: a camera that looks ahead)
     hom = getattr(m, "homography", None)
-    look = look_shift(prev, cur, _work_matrix(mat if hom is None else hom, g.fx, g.fy), lag)
+    look = look_shift(prev, cur, work_matrix(mat if hom is None else hom, g.fx, g.fy), lag)
     if look is None:
         return replace(m, confidence=got[1]) if decline else m
     dx, dy, best, second = look
