@@ -19,7 +19,7 @@ class State:
     """Everything the next frame needs, rebuilt from the rows alone (resume)."""
 
     shape: tuple | None = None          # (h, w) of the first readable frame
-    box: tuple | None = None            # its content box (see motion.pair.content_box)
+    box: tuple | None = None            # its content box (see motion.framing.content_box)
     key: int | None = None              # keyframe index and its cumulative matrix
     key_cum: np.ndarray | None = None
     key_rate: float | None = None       # score / overlap of the first frame measured on it
@@ -33,7 +33,6 @@ class State:
     last_pose_measured: bool = False
     heading: float = 0.0                # unwrapped heading of the last pose
     rates: list = field(default_factory=list)   # score/overlap of the last measurements
-    last_method: str = ""               # the search that measured the last row ("": not measured)
 
 
 def advance(st: State, row: dict, tuning: OdometryTuning) -> None:
@@ -50,11 +49,9 @@ def advance(st: State, row: dict, tuning: OdometryTuning) -> None:
         st.rates = []
         st.vel = None
         st.last_pose_measured = True
-        st.last_method = ""
         return
     if status == "assumed":
         st.rates = []   # after a failure, no reference quality (a new scene is allowed)
-        st.last_method = ""
         st.prev, st.prev_cum = i, cum
         st.last_pose, st.last_pose_cum, st.last_pose_measured = i, cum, False
         return
@@ -79,7 +76,6 @@ def advance(st: State, row: dict, tuning: OdometryTuning) -> None:
     st.prev, st.prev_cum = i, cum
     st.meas, st.meas_cum = i, cum
     st.last_pose, st.last_pose_cum, st.last_pose_measured = i, cum, True
-    st.last_method = row.get("method") or ""
 
 
 def ref_cum(st: State, ref: int) -> np.ndarray:
