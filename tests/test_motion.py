@@ -43,10 +43,29 @@ def test_known_heading_and_altitude_is_the_2d_case():
     assert _max_err(m.matrix, truth.motion, prev.shape) < 1.0
 
 
-def test_unrelated_frames_give_none_rather_than_a_random_motion():
+def test_unrelated_frames_give_none_rather_than_a_random_motion(caplog):
     a = S.seabed((240, 320), seed=1)
     b = S.seabed((240, 320), seed=2)
-    assert seahough.estimate_motion(a, b) is None
+    with caplog.at_level("INFO", logger="seahough.motion"):
+        assert seahough.estimate_motion(a, b) is None
+    # and says why, with the figures the user's thresholds judged
+    (why,) = [r.getMessage() for r in caplog.records if r.name == "seahough.motion"]
+    assert why.startswith("no motion: ")
+    assert ("under min_" in why or "over max_nfa" in why or "no pose" in why), why
+
+
+def test_a_declined_pair_names_the_threshold_it_missed(caplog):
+    prev, cur, _ = S.frame_pair(S.seabed((600, 800), seed=7), frame_size=(240, 320),
+                                max_shift=0.2, water="moderate", seed=7)
+    with caplog.at_level("INFO", logger="seahough.motion"):
+        m = seahough.estimate_motion(prev, cur)
+        assert m is not None and not caplog.records     # an answer logs nothing
+        assert seahough.estimate_motion(prev, cur, min_score=0.99) is None
+        assert seahough.estimate_motion(prev, cur, max_nfa=1e-320) is None
+    msgs = [r.getMessage() for r in caplog.records]
+    assert len(msgs) == 2
+    assert "under min_score 0.99 (confidence " in msgs[0], msgs[0]
+    assert "over max_nfa 1e-320" in msgs[1], msgs[1]
 
 
 def test_frames_of_different_sizes_are_refused():

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass
 
@@ -12,7 +13,7 @@ from ..core.detector import Detector
 from ..core.features import Features, extract_features
 from ..core.pattern import Pattern
 from ..core.preprocess import choose_factor
-from ..errors import ImageSizeError, ParameterError, PatternError
+from ..errors import ParameterError, PatternError
 from ..geometry import (corner_gap, frame_centre, matrix_to_pose, overlap, shift_origin,
                         wrap_angle)
 from .parallax import check_locally, frame_points, work_matrix
@@ -21,15 +22,11 @@ from .pyramid import CoarseVote, coarse_to_fine, coarse_vote, ladder
 from .repeats import resolve
 from .._validate import check_max_nfa, number
 from ..io.images import to_gray
+from .framing import MIN_MOTION_SIDE, check_motion_size, content_box  # noqa: F401  (their home was here)
 
-#: The smallest side, in pixels, of a frame whose motion is measured. Thinner
-#: frames were measured wrong with full confidence: strips of 8-48 rows cut
-#: from the real sequences and the procedural seabed, identical or shifted by
-#: a few pixels, gave 7-10 wrong answers in 624 (corners off by 2-140 px, at
-#: confidence up to 1.0); from 56 rows on, and for squares from 32 px on, no
-#: answer was wrong at a confidence over 0.3 (the few wrong ones, at 0.15-0.26,
-#: are as rare as in full-size frames). 64 keeps a step of margin.
-MIN_MOTION_SIDE = 64
+#: Why :func:`estimate_motion` returned None, at INFO level (``logging.basicConfig(level=logging.INFO)``).
+log = logging.getLogger("seahough.motion")
+
 #: A pair whose similarity is not confident enough is measured tile by tile
 #: (:func:`measure_pair`) only when the vote's own runner-up scores at least
 #: this share less than its answer (``1 - runner-up / answer``). Read from the
@@ -181,6 +178,11 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
     Returns
     -------
     Motion or None
+        None: the motion cannot be told; why (nothing found, or which of
+        ``min_confidence``, ``min_score``, ``max_nfa`` the best motion
+        missed, with its figures) is logged at INFO level on the
+        ``"seahough.motion"`` logger (``logging.basicConfig(level=logging.INFO)``
+        prints it).
 
     Raises
     ------
@@ -259,23 +261,6 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
         hom = np.linalg.inv(t) @ hom @ t
     return Motion(full, float(dx), float(dy), m.angle, m.scale, m.confidence, m.score,
                   overlap(full, w, h), m.nfa, m.parallax, hom)
-
-
-def check_motion_size(shape, label: str = "frames") -> None:
-    """An ImageSizeError when a frame of ``shape`` is too small to measure
-    motion in (a side under :data:`MIN_MOTION_SIDE`).
-
-    >>> check_motion_size((64, 320))
-    >>> try:
-    ...     check_motion_size((8, 320))
-    ... except ImageSizeError as e:
-    ...     print(e)
-    frames: 320x8 is too small to measure motion (each side must be at least 64 px)
-    """
-    h, w = shape[:2]
-    if min(h, w) < MIN_MOTION_SIDE:
-        raise ImageSizeError(f"{label}: {w}x{h} is too small to measure motion (each side must "
-                             f"be at least {MIN_MOTION_SIDE} px)")
 
 
 def frame_factor(shape, config: Config, scale_range) -> float:
@@ -552,47 +537,39 @@ def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
     r = measure_pair(pattern, cur, scale_range, angle_range, region, min_score=min_score,
                      min_confidence=min_confidence, config=cfg, features=features,
                      tiles=homography)
-    if r is None or r.confidence < min_confidence or r.score < min_score or r.nfa > max_nfa:
+    why = declined(r, min_confidence, min_score, max_nfa)
+    if why:
+        log.info("no motion: %s", why)
         return None
     x, y, scale, angle = r.pose((ox, oy))
     return Motion(r.matrix, x - ox, y - oy, wrap_angle(angle, low=-180.0), scale, r.confidence,
                   r.score, overlap(r.matrix, w, h), float(r.nfa), r.parallax, r.homography)
 
 
+def declined(r: PairMeasure | None, min_confidence: float, min_score: float,
+             max_nfa: float) -> str:
+    """Why a pair's best measurement ``r`` is not reported ("" when it is).
+
+    >>> m = PairMeasure(np.eye(2, 3), confidence=0.1, score=0.4, nfa=1e-9)
+    >>> declined(m, 0.15, 0.15, 1.0)
+    'confidence 0.1 under min_confidence 0.15 (score 0.4, NFA 1e-09)'
+    >>> declined(None, 0.15, 0.15, 1.0)
+    'no pose of the previous frame found in the current one'
+    """
+    if r is None:
+        return "no pose of the previous frame found in the current one"
+    figures = {"confidence": r.confidence, "score": r.score, "NFA": r.nfa}
+    for name, limit, bad in (("confidence", min_confidence, r.confidence < min_confidence),
+                             ("score", min_score, r.score < min_score),
+                             ("NFA", max_nfa, r.nfa > max_nfa)):
+        if bad:
+            rest = ", ".join(f"{k} {v:.3g}" for k, v in figures.items() if k != name)
+            side = "over max_nfa" if name == "NFA" else f"under min_{name}"
+            return f"{name} {figures[name]:.3g} {side} {limit:.3g} ({rest})"
+    return ""
+
+
 def _check_thresholds(max_shift, min_confidence, min_score) -> None:
     number("max_shift", max_shift, lo=0.0, lo_open=True, hi=1.5)
     number("min_confidence", min_confidence, lo=0.0, hi=1.0)
     number("min_score", min_score, lo=0.0, hi=1.0)
-
-
-def content_box(gray: np.ndarray, margin: int = 2) -> tuple[int, int, int, int]:
-    """(x0, y0, x1, y1), end exclusive: the frame without its dark or flat
-    border (black lines that video decoders and cameras leave at the edges)
-    and ``margin`` pixels more. Static edges there would vote for "no
-    motion" in every pair."""
-    h, w = gray.shape
-    # (every third pixel: as good a level, a tenth of the time)
-    interior = gray[h // 4: 3 * h // 4: 3, w // 4: 3 * w // 4: 3]
-    level = float(np.median(interior))
-
-    def depth(lines: np.ndarray) -> int:
-        # lines: the side's outermost lines as rows, outermost first: how
-        # many of them in a row are dark or flat (most frames: not the first;
-        # else the rest at once, each row reduced as a line of its own)
-        for k0, k1 in ((0, 1), (1, lines.shape[0])):
-            part = np.ascontiguousarray(lines[k0:k1])
-            bad = (part.mean(axis=1) < 0.5 * level) | (part.std(axis=1) < 1.0)
-            if not bad.all():
-                return k0 + int(np.argmin(bad))
-        return int(lines.shape[0])
-
-    lim_y, lim_x = max(h // 10, 1), max(w // 10, 1)
-    top = depth(gray[:lim_y])
-    bottom = depth(gray[h - lim_y:][::-1])
-    left = depth(gray[:, :lim_x].T)
-    right = depth(gray[:, w - lim_x:][:, ::-1].T)
-    box = (left + margin, top + margin, w - right - margin, h - bottom - margin)
-    small = max(w // 2, MIN_MOTION_SIDE), max(h // 2, MIN_MOTION_SIDE)
-    if box[2] - box[0] < small[0] or box[3] - box[1] < small[1]:
-        return (0, 0, w, h)  # (also frames too small to lose a margin)
-    return box

@@ -34,7 +34,7 @@ from ..core.features import Features
 from ..errors import ImageError
 from ..io.frames import FrameReader
 from ..io.images import to_gray
-from .pair import check_motion_size
+from .framing import check_motion_size
 
 __all__ = ["Prefetch", "Prepared", "overlapped"]
 
