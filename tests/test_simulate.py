@@ -404,6 +404,20 @@ def test_views_lie_inside_the_photo(photo_shape):
             assert view.min() >= 190
 
 
+def test_a_photo_magnified_into_a_blur_is_said_so(caplog):
+    # a long turn over a small photo: every frame an enlarged blur, without a word
+    photo = np.full((240, 320, 3), 200, np.uint8)
+    with caplog.at_level("WARNING", logger="seahough.sim"):
+        S.sequence(photo, n_frames=4, frame_size=(48, 64), step=6.0, water=None, seed=0)
+    assert not caplog.records                    # (magnified 1x: nothing to say)
+    with caplog.at_level("WARNING", logger="seahough.sim"):
+        S.sequence(photo, n_frames=60, frame_size=(120, 160), path="turn", water=None, seed=0)
+    (msg,) = [r.getMessage() for r in caplog.records]
+    assert msg.startswith("note: the photo (320x240) is magnified ") and "blurred" in msg, msg
+    u = float(msg.split("magnified ")[1].split("x")[0])
+    assert u > S._views.MAGNIFY_NOTE
+
+
 def test_frame_pair_given_motion_and_water():
     prev, cur, truth = S.frame_pair(frame_size=(240, 320), shift=(30, -20), angle=10,
                                     scale=1.05, water="moderate", seed=1)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import calendar
 import errno
+import logging
 import os
 import re
 import stat
@@ -64,6 +65,11 @@ IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".pgm", ".
                     ".webp", ".jp2")
 VIDEO_EXTENSIONS = (".mp4", ".avi", ".mov", ".mkv", ".m4v", ".mpg", ".mpeg", ".wmv", ".webm",
                     ".mts", ".ts", ".3gp")
+#: Pictures a folder may hold that are not read as frames (said so, not skipped silently).
+OTHER_PICTURES = (".gif", ".heic", ".heif", ".avif", ".dng", ".cr2", ".cr3", ".nef", ".arw",
+                  ".orf", ".rw2", ".raw", ".exr", ".hdr", ".jxl")
+#: What a folder holds and is not read (subfolders, videos, other pictures), at WARNING level.
+log = logging.getLogger("seahough.io")
 
 
 def _natural_key(s: str):
@@ -176,7 +182,12 @@ def list_frames(frames) -> list:
     Every entry of a folder whose name ends with an image extension is a
     frame, whatever it is: a broken link, a link loop, a folder or a FIFO so
     named cannot be read and gets an ``unreadable`` row in a dead-reckoning
-    run (names starting with ``.`` are left out). A video's frames are as
+    run (names starting with ``.`` are left out). What a folder holds that
+    may have been meant as frames and is not read (its subfolders: a folder
+    is not searched inside; videos; pictures of other formats, such as
+    ``.gif``) is named in a note, logged at WARNING level on the
+    ``"seahough.io"`` logger (printed on stderr unless logging is set up
+    otherwise). A video's frames are as
     many as its header counts (``CAP_PROP_FRAME_COUNT``), or as the decoder
     gives if more: frames the decoder cannot give (damaged data) keep their
     place and cannot be read, so that a damaged video never looks complete.
@@ -200,11 +211,15 @@ def list_frames(frames) -> list:
     if len(items) == 1 and isinstance(items[0], (str, os.PathLike)):
         p = Path(items[0])
         if p.is_dir():
-            files = [f for f in p.iterdir() if not f.name.startswith(".")
-                     and f.suffix.lower() in IMAGE_EXTENSIONS]
+            entries = [f for f in p.iterdir() if not f.name.startswith(".")]
+            files = [f for f in entries if f.suffix.lower() in IMAGE_EXTENSIONS]
+            left = _not_read(entries)
             if not files:
-                raise ParameterError(f"{p}: no image files ({', '.join(IMAGE_EXTENSIONS)}) "
-                                     "in this folder")
+                raise ParameterError(f"{printable(p)}: no image files "
+                                     f"({', '.join(IMAGE_EXTENSIONS)}) in this folder"
+                                     + (f"; not read: {left}" if left else ""))
+            if left:
+                log.warning("note: %s: not read: %s", printable(p), left)
             times = [time_from_name(f.name) for f in files]
             if all(t is not None for t in times):
                 order = sorted(range(len(files)),
@@ -234,6 +249,26 @@ def list_frames(frames) -> list:
     if not out:
         raise ParameterError("frames: the list is empty")
     return out
+
+
+def _not_read(entries) -> str:
+    """What of a folder's ``entries`` is not a frame and may have been
+    meant as frames (subfolders: not searched; videos and other picture
+    formats), said in words; "" when nothing (other files: a navigation
+    log, notes, are no frames and go unsaid)."""
+    dirs = sorted(f for f in entries if f.suffix.lower() not in IMAGE_EXTENSIONS and f.is_dir())
+    kinds = []
+    if dirs:
+        kinds.append(f"{len(dirs)} subfolder{'s' * (len(dirs) > 1)} (folders are not "
+                     f"searched inside: give each folder, e.g. {printable(dirs[0].name)}, "
+                     "or a list of files)")
+    for what, exts in (("video", VIDEO_EXTENSIONS), ("other picture", OTHER_PICTURES)):
+        got = sorted({f.suffix.lower() for f in entries if f.suffix.lower() in exts
+                      and f not in dirs})
+        n = sum(f.suffix.lower() in exts and f not in dirs for f in entries)
+        if n:
+            kinds.append(f"{n} {what} file{'s' * (n > 1)} ({', '.join(got)})")
+    return "; ".join(kinds)
 
 
 def _entry(path: str) -> os.stat_result:
