@@ -125,6 +125,21 @@ def test_survey_chain_benchmark_runs():
         proc.stdout
 
 
+@pytest.mark.skipif(not (DATA / "sequences" / "sparus_auv_seabed").is_dir(),
+                    reason="needs ../shared/data/sequences")
+def test_survey_joins_benchmark_quick():
+    """bench/bench_survey_joins.py --quick: a chunked dead reckoning against one run."""
+    pytest.importorskip("distributed")
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), env.get("PYTHONPATH", "")])
+    proc = subprocess.run([sys.executable, str(ROOT / "bench" / "bench_survey_joins.py"),
+                           "--quick"], cwd=ROOT, env=env, capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    m = re.search(r"\| sparus_auv_seabed \| 22 \| ([\d.]+) px \|", proc.stdout)
+    assert m and float(m.group(1)) < 10.0, proc.stdout
+
+
 def test_real_pairs_benchmark_quick(tmp_path):
     """bench/bench_real_pairs.py --quick: every table, counts that add up."""
     if shared_data_dir() is None:

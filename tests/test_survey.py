@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import importlib
 import json
+import shutil
 import os
 import signal
 import socket
@@ -151,6 +152,44 @@ def test_mismatched_rerun_refused(scenes, first):
                       r.images.parent)
     with pytest.raises(ParameterError, match="other settings: pattern"):
         survey_detect(seahough.Pattern.rectangle(40, 30), inputs, r.images.parent)
+
+
+def test_errors_retried_and_more_images_added(scenes, cluster, tmp_path, capsys):
+    # a photo still being copied when the survey read it, then more photos
+    imgs = scenes / "imgs"
+    late = tmp_path / "late.png"
+    inputs = [str(imgs / "s0.png"), str(imgs / "s1.png"), str(late)]
+    out = tmp_path / "out"
+    kw = dict(scheduler=cluster.scheduler_address, progress=False)
+    r = survey_detect(_pattern(scenes), inputs, out, **kw)
+    assert (r.total, r.errors, r.processed) == (3, 1, 3)
+    shutil.copy(imgs / "s2.png", late)
+    r = survey_detect(_pattern(scenes), inputs, out, **kw)     # (a plain rerun: as it was)
+    assert (r.errors, r.processed) == (1, 0)
+    r = survey_detect(_pattern(scenes), inputs, out, retry_errors=True, **kw)
+    assert (r.total, r.errors, r.processed, r.found) == (3, 0, 1, 3)
+    rows = _check_once(r, 3)
+    assert rows[2]["status"] == "found" and rows[2]["error"] is None
+    # more images after the survey's own: only they are searched
+    more = inputs + [str(imgs / "s3.png"), str(imgs / "s4.png")]
+    r = survey_detect(_pattern(scenes), more, out, **kw)
+    assert (r.total, r.processed, r.errors) == (5, 2, 0)
+    assert [row["path"] for row in _check_once(r, 5)] == more
+    manifest = json.loads(r.manifest.read_text())
+    assert manifest["state"] == "complete" and manifest["inputs"]["count"] == 5
+    # fewer, or others in their place, are another survey
+    with pytest.raises(ParameterError, match="other images: 5 images \\(now 4\\)"):
+        survey_detect(_pattern(scenes), more[:4], out, **kw)
+    # from the command line
+    imgs_dir = tmp_path / "dive"
+    imgs_dir.mkdir()
+    for i in (5, 6):
+        shutil.copy(imgs / f"s{i}.png", imgs_dir / f"s{i}.png")
+    code, outp, err = _cli(capsys, "detect", scenes / "pattern.png", *more, imgs_dir / "s5.png",
+                           "--out", out, "--scheduler", cluster.scheduler_address,
+                           "--retry-errors", "--quiet")
+    assert code == 0, err
+    assert "images: 6   found: 6" in outp and "searched 1 image " in outp
 
 
 def test_interrupted_run_continues(scenes, cluster, tmp_path, monkeypatch):
@@ -328,6 +367,7 @@ def test_cli_detect(scenes, cluster, tmp_path, capsys):
     # rerun: nothing searched; other settings: one line, exit 2
     code, out, err = _cli(capsys, "detect", pat, scenes / "imgs", "--out", tmp_path / "b")
     assert code == 1 and "nothing to search" in out
+    assert "\nresults: " in out and "wrote:" not in out      # (nothing was written)
     code, out, err = _cli(capsys, "detect", pat, scenes / "imgs", "--out", tmp_path / "b",
                           "--min-score", "0.6")
     assert code == 2 and err.count("\n") == 1

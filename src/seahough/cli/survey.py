@@ -76,15 +76,20 @@ def _errors(images_path: Path, limit: int) -> list[tuple[str, str]]:
 @_cluster_options
 @click.option("--batch-size", type=click.IntRange(min=1), default=None, metavar="N",
               help="Images per task (default: up to 16).")
+@click.option("--retry-errors", is_flag=True,
+              help="Search again the images that could not be read or searched before "
+                   "(status error).")
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON object.")
 @click.option("--quiet", "-q", is_flag=True,
               help="No progress bar (shown on stderr only when it is a terminal).")
-def detect(pattern, inputs, out, workers, scheduler, batch_size, as_json, quiet, **search):
+def detect(pattern, inputs, out, workers, scheduler, batch_size, retry_errors, as_json, quiet,
+           **search):
     """Find PATTERN in every image of INPUT... (a survey).
 
     \b
     INPUT is an image file, a folder (its images, in name order, or in the
-    order of the timestamps in their names), or @LIST.txt: a file of paths,
+    order of the timestamps in their names; not its subfolders, which a
+    note names), or @LIST.txt: a file of paths,
     one a line (a shell cannot pass 100,000 names); a file or folder given
     here that does not exist is bad input (exit 2), one listed in @LIST.txt
     gets an error row. PATTERN and the search options are those of
@@ -104,8 +109,10 @@ def detect(pattern, inputs, out, workers, scheduler, batch_size, as_json, quiet,
       survey.json         the settings, the inputs and the counts
     Results are saved in shards as they come (parts/): run the same
     command again to continue an interrupted survey (nothing is searched
-    twice; a complete survey is not searched again). Another survey in
-    the same --out (other settings or images) is refused.
+    twice; a complete survey is not searched again), with more images
+    after its own (a folder a dive is still adding to) to search those
+    too, with --retry-errors to search its unreadable images again.
+    Another survey in the same --out (other settings or images) is refused.
 
     \b
     Exit status: 0 every image was searched (found or not: see the counts);
@@ -130,7 +137,8 @@ def detect(pattern, inputs, out, workers, scheduler, batch_size, as_json, quiet,
         if not item.startswith("@") and not Path(item).exists():
             raise _Fail(f"{printable(item)}: no such file or folder")
     result = run_survey(detector, list(inputs), out, workers=workers, scheduler=scheduler,
-                        batch_size=batch_size, progress=not quiet and _stderr_is_terminal())
+                        batch_size=batch_size, progress=not quiet and _stderr_is_terminal(),
+                        retry_errors=retry_errors)
     errors = _errors(result.images, SHOW_ERRORS) if result.errors else []
     summary = {"images": result.total, "found": result.found, "not_found": result.not_found,
                "errors": result.errors, "detections": result.n_detections,
@@ -156,8 +164,9 @@ def detect(pattern, inputs, out, workers, scheduler, batch_size, as_json, quiet,
     if result.errors > len(errors):
         click.echo(f"  ... and {result.errors - len(errors)} more (status \"error\" in "
                    "images.parquet)")
-    click.echo("wrote: " + ", ".join(printable(p) for p in (result.images, result.detections,
-                                                           result.manifest)))
+    click.echo(("wrote: " if result.processed else "results: ")
+               + ", ".join(printable(p) for p in (result.images, result.detections,
+                                                  result.manifest)))
     return status
 
 

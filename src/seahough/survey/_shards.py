@@ -41,6 +41,7 @@ from ..errors import ParameterError, WriteError
 
 try:
     import pyarrow as pa
+    import pyarrow.compute as pc
     import pyarrow.parquet as pq
 except ImportError:   # (a ParameterError: one line from the CLI, as for a missing Dask)
     raise ParameterError("the survey commands need pyarrow: pip install 'seahough[survey]'") \
@@ -210,12 +211,18 @@ class SurveyFolder:
         cwd = rec.get("cwd") or os.getcwd()
         return [os.path.abspath(os.path.join(cwd, p)) for p in t.column("path").to_pylist()]
 
-    def _check_inputs(self, rec: dict, paths: list[str], absolute: list[str]) -> None:
+    def _check_inputs(self, rec: dict, paths: list[str], absolute: list[str]) -> bool:
+        """Whether the survey's images are ``paths`` (False) or ``paths``
+        begin with them (True: more images, e.g. a folder a dive is still
+        adding to); a ParameterError when neither."""
         old = rec["inputs"]
         if old.get("hash") == _digest(absolute) and old["count"] == len(paths):
-            return
+            return False
         what = f"{old['count']} images (now {len(paths)})"
         before = self._old_inputs(rec)
+        if (before is not None and len(before) == old["count"] < len(absolute)
+                and _digest(absolute[:len(before)]) == old.get("hash")):
+            return True
         if before is not None:
             i = next((k for k, (a, b) in enumerate(zip(before, absolute)) if a != b), None)
             if i is not None:
@@ -224,7 +231,8 @@ class SurveyFolder:
             else:
                 what += f"; the first {min(len(before), len(absolute))} are the same"
         raise ParameterError(f"{self.path}: holds a survey of other images: {what}. Give its "
-                             "images to continue it, or another output folder")
+                             "images (and more after them, if any) to continue it, or another "
+                             "output folder")
 
     def start(self, settings: dict, paths: list[str]) -> set:
         """Begin or continue the survey of ``paths`` with ``settings`` (plain
@@ -240,6 +248,7 @@ class SurveyFolder:
         digest = settings_hash(settings)
         absolute = [os.path.abspath(p) for p in paths]
         rec = self._read_manifest()
+        grown = False
         for p in (self.images, self.detections, self.manifest):
             self._run.check_writable(p)
         if rec is not None:
@@ -250,8 +259,12 @@ class SurveyFolder:
                     f"{self.path}: holds a survey made with other settings: "
                     f"{'; '.join(changes[:4])}{more}. Give its settings to continue it, or "
                     "another output folder")
-            self._check_inputs(rec, paths, absolute)
+            grown = self._check_inputs(rec, paths, absolute)
             self._record = rec
+            if grown:   # the images added are searched, the survey is running again
+                rec.update(inputs={"count": len(paths), "hash": _digest(absolute)},
+                           state="running", counts=None, files={})
+                rec.pop("finished", None)
         else:
             self._record = {
                 "format": FORMAT, "command": "survey detect", "seahough": __version__,
@@ -263,6 +276,7 @@ class SurveyFolder:
         self._mkparts()
         if rec is None:
             self._clear_parts()                 # a survey whose manifest was removed
+        if rec is None or grown:
             self._write(self.parts / "inputs.parquet", pa.table(
                 {"index": pa.array(range(len(paths)), pa.int64()),
                  "path": pa.array([_text(p) for p in paths], pa.string())}))
@@ -310,6 +324,30 @@ class SurveyFolder:
                 self._remove(p)
         nums = [int(n[:-len(".parquet")]) for n in done if n[:-len(".parquet")].isdigit()]
         self._next = max(nums, default=-1) + 1
+
+    def forget_errors(self) -> int:
+        """Take the rows of the images that could not be read or searched
+        (status ``error``) out of the shards, so that they are searched
+        again; returns how many. (A shard is rewritten whole, or not at
+        all: an interruption loses nothing.)"""
+        n = 0
+        for p in self._part_names("images"):
+            try:
+                t = pq.read_table(p, schema=IMAGES_SCHEMA)
+            except (OSError, pa.ArrowException) as e:
+                raise WriteError(f"{p}: cannot read this shard ({e}); remove it to search its "
+                                 "images again") from None
+            bad = pc.equal(t.column("status"), "error")
+            k = pc.sum(bad).as_py() or 0
+            if k:
+                # (error rows have no detections: the detections shard stays)
+                self._write(p, t.filter(pc.invert(bad)))
+                n += k
+        if n and self._record.get("state") == "complete":
+            self._record.update(state="running", counts=None, files={})
+            self._record.pop("finished", None)
+            self._write_manifest()
+        return n
 
     def done(self) -> set:
         """The indices of the images whose rows are in a shard."""

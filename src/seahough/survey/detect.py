@@ -335,7 +335,7 @@ def _run(client, detector, paths, todo, folder, batch_size, progress, on_batch) 
 def detect(pattern, images, out, *, workers: int | None = None, scheduler: str | None = None,
            scale_range=None, angle_range=None, config=None, max_results=None, min_score=None,
            min_confidence=None, max_nfa=None, search_region=None, batch_size: int | None = None,
-           progress: bool = True, on_batch=None) -> SurveyResult:
+           progress: bool = True, on_batch=None, retry_errors: bool = False) -> SurveyResult:
     """Find ``pattern`` in every image of ``images``, on a Dask cluster; the
     results in ``out/images.parquet`` and ``out/detections.parquet``.
 
@@ -349,7 +349,8 @@ def detect(pattern, images, out, *, workers: int | None = None, scheduler: str |
     out : path
         The output folder. A rerun with the same settings and images
         searches only the images not done yet (none when complete); with
-        other settings or images it is refused.
+        the same images and more after them (a folder a dive is still
+        adding to), those too; with other settings or images it is refused.
     workers : int, optional
         Worker processes of the local cluster (default: all cores).
     scheduler : str, optional
@@ -366,6 +367,10 @@ def detect(pattern, images, out, *, workers: int | None = None, scheduler: str |
         Called as ``on_batch(done, total)`` (images) after each batch's
         rows arrive; an exception it raises stops the survey, the rows
         received so far kept.
+    retry_errors : bool
+        Search again the images of a rerun that could not be read or
+        searched before (status ``error``: a file system that was away, a
+        file still being copied).
 
     Returns
     -------
@@ -407,6 +412,8 @@ def detect(pattern, images, out, *, workers: int | None = None, scheduler: str |
     searched = 0
     with SurveyFolder(out) as folder:
         done = folder.start(settings, paths)
+        if retry_errors and folder.forget_errors():
+            done = folder.done()
         todo = [i for i in range(len(paths)) if i not in done]
         if todo:
             with open_client(workers, scheduler) as client:
