@@ -315,6 +315,34 @@ def test_frame_order_and_timestamps(tmp_path):
         list_frames(tmp_path / "missing")
 
 
+def test_a_folder_says_what_it_does_not_read(tmp_path, caplog):
+    # subfolders (not searched inside), videos and picture formats it cannot
+    # read were left out without a word; a navigation log is no frame
+    for name in ("f1.png", "f2.png"):
+        cv2.imwrite(str(tmp_path / name), np.zeros((16, 16), np.uint8))
+    for name in ("dive2", "dive3"):
+        (tmp_path / name).mkdir()
+    for name in ("clip.mp4", "a.gif", "b.GIF", "nav.csv", ".hidden.gif"):
+        (tmp_path / name).write_bytes(b"x")
+    with caplog.at_level("WARNING", logger="seahough.io"):
+        assert [Path(p).name for p in list_frames(tmp_path)] == ["f1.png", "f2.png"]
+    (msg,) = [r.getMessage() for r in caplog.records]
+    assert msg.startswith(f"note: {tmp_path}: not read: 2 subfolders"), msg
+    assert "give each folder, e.g. dive2" in msg and "1 video file (.mp4)" in msg, msg
+    assert "2 other picture files (.gif)" in msg and "nav.csv" not in msg, msg
+    # a folder with only subfolders: the error says where the images may be
+    top = tmp_path / "dive2"
+    (top / "cam0").mkdir()
+    with pytest.raises(seahough.ParameterError, match=r"no image files .*; not read: 1 "
+                                                      r"subfolder .*e\.g\. cam0"):
+        list_frames(top)
+    # nothing to say: no note
+    caplog.clear()
+    with caplog.at_level("WARNING", logger="seahough.io"):
+        list_frames([str(tmp_path / "f1.png"), str(tmp_path / "f2.png")])
+    assert not caplog.records
+
+
 def test_video_file_and_grey_16bit_frames(tmp_path):
     # One sequence whether ../shared/data is there or not: this tests reading
     # videos and 16-bit frames, so its frames must not change with the data.
@@ -560,25 +588,6 @@ def test_resume_gives_the_same_result(tmp_path):
     # a CSV of another sequence is refused
     with pytest.raises(seahough.ParameterError, match="not the same sequence"):
         run_odometry(paths[::-1], tmp_path / "resumed", resume=True, progress=False)
-
-
-def test_a_resume_rebuilds_the_last_rows_search_from_the_csv(tmp_path):
-    # the keyframe check depends on the last row's search (State.last_method):
-    # rebuilt from the CSV's rows, it is what the run had, row after row
-    from seahough.config import OdometryTuning
-    from seahough.motion.state import State, advance
-    from seahough.motion.track import iter_odometry_csv
-    frames, _ = _sequence("turn", n=8, seed=8)
-    frames[5] = np.full_like(frames[5], 90)               # a frame that cannot be measured
-    res = run_odometry(frames, tmp_path / "run", progress=False, mosaic=False, workers=1)
-    st = State(shape=frames[0].shape[:2])
-    seen = []
-    for r in iter_odometry_csv(res.csv_path):
-        r["_cum"] = None if r["matrix"] is None else np.asarray(r["matrix"], float).reshape(2, 3)
-        advance(st, r, OdometryTuning())
-        seen.append(st.last_method)
-    want = [r["method"] if r["status"] == "measured" else "" for r in res.rows]
-    assert seen == want and "prior" in want and "" in want[1:], want
 
 
 _KILL_SCRIPT = """
