@@ -76,6 +76,25 @@ def test_primitive_found_at_random_pose_with_noise_blur_and_a_fifth_hidden(name)
     assert sum(k and e <= 2.0 for k, e in zip(kept, errors)) >= 6, (kept, errors)
 
 
+def test_a_disc_is_not_a_ring():
+    # a disc matches a ring's outer circle, 62 % of its points (over min_score)
+    # at an NFA far below 1: the ring's hole must be seen too (core/parts.py)
+    ring = seahough.Pattern.circle(40, inner_radius=25)
+    disc = seahough.Pattern.circle(40)
+    off = seahough.Config(search=seahough.config.SearchTuning(hole_support=0.0))
+    found = {"disc": 0, "ring": 0, "disc, unchecked": 0}
+    for seed in range(4):
+        for name, pat in (("disc", disc), ("ring", ring)):
+            scene, truth = _scene(pat.image, _coverage(pat), 40 + seed, scale_range=(0.6, 1.4),
+                                  hide=0.0)
+            for key, cfg in ((name, None), (f"{name}, unchecked", off)):
+                if key == "ring, unchecked":
+                    continue
+                dets = seahough.Detector(ring, scale_range=(0.5, 2.0), config=cfg).detect(scene)
+                found[key] += any(math.hypot(d.x - truth.x, d.y - truth.y) < 3 for d in dets)
+    assert found == {"disc": 0, "ring": 4, "disc, unchecked": 4}, found
+
+
 @pytest.mark.parametrize("name", S.MARKERS)
 def test_image_pattern_markers_found_in_moderate_water(name):
     img, mask = S.marker(name, 120)

@@ -76,6 +76,11 @@ class SearchTuning:
     band_slack : float
         How far (px) the full-resolution refinement may move the pose beyond
         its first match radius, when its edges are limited to a band.
+    hole_support : float
+        A pattern with a hole (a ring's inner circle) is not reported where
+        the hole's points match less than this share of what the whole
+        pattern matches (a disc is not a ring: :mod:`seahough.core.parts`);
+        0: not checked.
 
     Examples
     --------
@@ -96,9 +101,11 @@ class SearchTuning:
     screen: float = 0.5
     min_finish_points: int = 8
     band_slack: float = 2.0
+    hole_support: float = 0.4
 
     def __post_init__(self) -> None:
-        _check_fields(self, "Config.search", shares=("overlap", "good_fit", "screen"),
+        _check_fields(self, "Config.search", shares=("overlap", "good_fit", "screen",
+                                                     "hole_support"),
                       counts=("full_treatment", "top_votes", "neighbour_seeds",
                               "min_finish_points"),
                       pixels=("max_radius", "look_radius", "band_slack"))

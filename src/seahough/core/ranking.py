@@ -20,7 +20,8 @@ from .candidates import Candidate, SearchContext, icp_subset
 from .features import Features
 from .keypoints import edge_points_near_image
 from .nfa import CELL, background, evidence, log10_tests
-from .refine import Fit, Pose, refine
+from .parts import hole_labels, unseen_hole
+from .refine import Fit, Pose, match, refine
 from .symmetry import turn_pose
 
 #: Flag on line detections: the position along the line is not measured.
@@ -391,7 +392,7 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
         if any(cmp.same(c.full.pose, a.full.pose, 1.0) for a in accepted):
             continue
         judge(ctx, c)  # (only those that could be accepted: it costs a little)
-        if c.evidence.nfa > ctx.max_nfa:
+        if c.evidence.nfa > ctx.max_nfa or _unseen_hole(ctx, c):
             continue
         accepted.append(c)
     # runner-up: the best candidate that is not (nearly) the same pose as a detection
@@ -427,6 +428,22 @@ def judge(ctx: SearchContext, c: Candidate) -> None:
     c.evidence = evidence(c.fit.pose, pf.vx, pf.vy, pf.vangle, feats.edges, feats.index,
                           bg, search_tests(ctx), tol=tol, either=ctx.pattern.either,
                           spacing=pf.spacing)
+
+
+def _unseen_hole(ctx: SearchContext, c: Candidate) -> bool:
+    """Whether the candidate's pattern has a hole its image lacks (a disc
+    found for a ring: :mod:`.parts`)."""
+    p, pf, cfg = ctx.pattern, ctx.pf, ctx.config
+    share = cfg.search.hole_support
+    if share <= 0.0 or p.is_frame or p.is_line or len(p.outline) < 2:
+        return False
+    labels = hole_labels(p.outline, p.origin, pf.vx, pf.vy, ctx.factor)
+    if labels is None:
+        return False
+    ids, _ = match(c.fit.pose, pf.vx, pf.vy, pf.vangle, ctx.features.edges, ctx.features.index,
+                   max(1.25, cfg.match_radius * ctx.factor), math.radians(cfg.angle_tolerance),
+                   p.either)
+    return unseen_hole(labels, ids >= 0, share)
 
 
 def search_tests(ctx: SearchContext) -> float:
