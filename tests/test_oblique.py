@@ -624,8 +624,8 @@ def test_a_keyframe_look_alike_gives_way_to_the_adjacent_frame(tmp_path):
     # a floor of the dev part of bench/bench_oblique.py (seed 207, frames 4-8):
     # the full searches and the prior against keyframe 4 found tile look-alikes
     # 8 % of the diagonal off at confidence 0.50-0.64, over the doubtful mark;
-    # found off the prior right after a frame that was too, they are checked
-    # against the adjacent frame, which disagrees and replaces them
+    # found off the prior, they are checked against the adjacent frame, which
+    # disagrees and replaces them
     frames, truth = _render_tiles(207, n_frames=10)   # (the dev run as rendered)
     frames = frames[4:9]
     rows = seahough.run_odometry(frames, tmp_path, mosaic=False, progress=False,

@@ -913,3 +913,22 @@ def test_an_aging_keyframe_of_a_scene_in_relief_gives_way_to_the_nearer_frame(tm
     # it stand while its threshold was two translation bins (36 px here)
     bad, compared = _step_disagreements(tmp_path, "aqualoc_amphorae_wreck", limit=10.0)
     assert bad == [] and compared >= 15, (bad, compared)
+
+
+def test_a_full_search_off_the_prior_is_checked_against_the_adjacent_frame(tmp_path):
+    # The real tiled pool cropped by 3 px (the pixel grid moved, nothing else):
+    # the prior failed at frame 8, and the full search against keyframe 5,
+    # right after a step measured on the prior, went a tile off (6.8 % of the
+    # diagonal at confidence 0.59, NFA 7e-98). Every full search's answer is
+    # now checked against the adjacent frame, which was right: each step
+    # agrees with estimate_motion on its own pair.
+    from seahough.geometry import corner_gap
+    files = list_frames(data_path("sequences", "subvo_pool_chain"))
+    frames = [cv2.imread(str(f), cv2.IMREAD_GRAYSCALE)[3:, 3:] for f in files]
+    rows = run_odometry(frames, tmp_path / "run", progress=False, mosaic=False, workers=1).rows
+    diag = math.hypot(*frames[0].shape)
+    row = rows[8]
+    assert row["status"] == "measured" and row["ref"] == 7, row
+    step = np.asarray(row["pair_matrix"], float).reshape(2, 3)
+    pair = seahough.estimate_motion(frames[7], frames[8])
+    assert corner_gap(step, pair.matrix, frames[0].shape) < 0.01 * diag

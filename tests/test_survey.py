@@ -70,6 +70,10 @@ def _rows(path):
     return pq.read_table(path).to_pylist()
 
 
+def _shards():
+    return importlib.import_module("seahough.survey._shards")
+
+
 def _check_once(result, n):
     rows = _rows(result.images)
     assert [r["index"] for r in rows] == list(range(n))
@@ -166,6 +170,26 @@ def test_errors_retried_and_more_images_added(scenes, cluster, tmp_path, capsys)
     shutil.copy(imgs / "s2.png", late)
     r = survey_detect(_pattern(scenes), inputs, out, **kw)     # (a plain rerun: as it was)
     assert (r.errors, r.processed) == (1, 0)
+    # a retry stopped while it rewrites a shard: the survey says it is running
+    # again, and its two files (which would hold the error) are gone
+    shards = _shards()
+    real_write = shards.SurveyFolder._write
+
+    def stop_at(name):
+        def write(self, path, table):
+            if path.name.startswith(name):
+                raise KeyboardInterrupt
+            return real_write(self, path, table)
+        return write
+
+    shards.SurveyFolder._write = stop_at("images-")
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            survey_detect(_pattern(scenes), inputs, out, retry_errors=True, **kw)
+    finally:
+        shards.SurveyFolder._write = real_write
+    assert json.loads((out / "survey.json").read_text())["state"] == "running"
+    assert not (out / "images.parquet").exists()
     r = survey_detect(_pattern(scenes), inputs, out, retry_errors=True, **kw)
     assert (r.total, r.errors, r.processed, r.found) == (3, 0, 1, 3)
     rows = _check_once(r, 3)
@@ -180,16 +204,30 @@ def test_errors_retried_and_more_images_added(scenes, cluster, tmp_path, capsys)
     # fewer, or others in their place, are another survey
     with pytest.raises(ParameterError, match="other images: 5 images \\(now 4\\)"):
         survey_detect(_pattern(scenes), more[:4], out, **kw)
+    # a growth stopped between the manifest and the input list: the next run goes on
+    old_list = pq.read_table(out / "parts" / "inputs.parquet")
+    grown = more + [str(imgs / "s5.png")]
+    shards.SurveyFolder._write = stop_at("inputs.parquet")
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            survey_detect(_pattern(scenes), grown, out, **kw)
+    finally:
+        shards.SurveyFolder._write = real_write
+    assert pq.read_table(out / "parts" / "inputs.parquet").equals(old_list)
+    assert not (out / "images.parquet").exists()     # (no stale complete results)
+    r = survey_detect(_pattern(scenes), grown, out, **kw)
+    assert (r.total, r.processed) == (6, 1)
+    assert pq.read_table(out / "parts" / "inputs.parquet").num_rows == 6
     # from the command line
     imgs_dir = tmp_path / "dive"
     imgs_dir.mkdir()
     for i in (5, 6):
         shutil.copy(imgs / f"s{i}.png", imgs_dir / f"s{i}.png")
-    code, outp, err = _cli(capsys, "detect", scenes / "pattern.png", *more, imgs_dir / "s5.png",
+    code, outp, err = _cli(capsys, "detect", scenes / "pattern.png", *grown, imgs_dir / "s5.png",
                            "--out", out, "--scheduler", cluster.scheduler_address,
                            "--retry-errors", "--quiet")
     assert code == 0, err
-    assert "images: 6   found: 6" in outp and "searched 1 image " in outp
+    assert "images: 7   found: 7" in outp and "searched 1 image " in outp
 
 
 def test_interrupted_run_continues(scenes, cluster, tmp_path, monkeypatch):

@@ -352,14 +352,19 @@ class Config:
 def config_record(config: Config) -> dict:
     """``config`` as plain values for a run's settings (what resuming a run
     compares). Fields added after runs were made are left out while unset
-    (``bit_depth`` None), so that those runs can still be continued.
+    or at their default (``bit_depth`` None, ``search.hole_support`` 0.4), so
+    that those runs can still be continued.
 
     >>> "bit_depth" in config_record(Config()), config_record(Config(bit_depth=12))["bit_depth"]
     (False, 12)
+    >>> "hole_support" in config_record(Config())["search"]
+    False
     """
     rec = dataclasses.asdict(config)
     if rec.get("bit_depth") in (None, 16):    # (16 bits: read as unset)
         rec.pop("bit_depth", None)
+    if rec["search"].get("hole_support") == SearchTuning.hole_support:
+        rec["search"].pop("hole_support")
     return rec
 
 
@@ -422,8 +427,8 @@ class OdometryTuning:
         ... and the ranges widened for at most this many frames of gap.
     doubtful : float
         A keyframe measurement less confident than this (or found without
-        the prior right after a frame measured without it too, or assumed)
-        is checked against the last measured frame (nearer in time) ...
+        the prior: it failed, or there was none) is checked against the
+        last measured frame (nearer in time) ...
     agree_px : float
         ... which replaces it when they differ by more than this many working
         pixels at the frame's corners (beyond a measurement's noise) and it

@@ -158,7 +158,9 @@ def detect(pattern, inputs, out, workers, scheduler, batch_size, retry_errors, a
         click.echo(f"searched {n} image{'s' if n != 1 else ''} in {result.seconds:.1f} s, "
                    f"cluster start included ({1000.0 * result.seconds / n:.1f} ms per image)")
     else:
-        click.echo("nothing to search: the survey in this folder was complete")
+        click.echo("nothing to search: the survey in this folder was complete"
+                   + (" (--retry-errors searches its unreadable images again)"
+                      if result.errors else ""))
     for p, e in errors:
         click.echo(f"  error: {printable(p)}: {printable(e)}")
     if result.errors > len(errors):

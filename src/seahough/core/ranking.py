@@ -384,6 +384,7 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
     # noise, JPEG, snow), the full resolution's sharper
     todo.sort(key=lambda c: -(c.full.score + c.work_score))
     accepted: list[Candidate] = []
+    other_object: list[Candidate] = []   # (a disc for a ring: no rival of the ring)
     for c in todo:
         if len(accepted) >= ctx.max_results:
             break
@@ -392,7 +393,10 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
         if any(cmp.same(c.full.pose, a.full.pose, 1.0) for a in accepted):
             continue
         judge(ctx, c)  # (only those that could be accepted: it costs a little)
-        if c.evidence.nfa > ctx.max_nfa or _unseen_hole(ctx, c):
+        if c.evidence.nfa > ctx.max_nfa:
+            continue
+        if _unseen_hole(ctx, c):
+            other_object.append(c)
             continue
         accepted.append(c)
     # runner-up: the best candidate that is not (nearly) the same pose as a detection
@@ -401,7 +405,8 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
         same = lambda c, a: cmp.same(c.fit.pose, a.fit.pose, ctx.factor)
     else:
         same = lambda c, a: cmp.close(c.fit.pose, a.fit.pose) or cmp.equivalent(c.fit.pose, a.fit.pose)
-    others = [c.work_score for c in cands if not any(c is a or same(c, a) for a in accepted)]
+    others = [c.work_score for c in cands
+              if not any(c is a or same(c, a) for a in accepted + other_object)]
     runner_up = max(others, default=0.0)
     dets = []
     for c in accepted:
@@ -437,7 +442,10 @@ def _unseen_hole(ctx: SearchContext, c: Candidate) -> bool:
     share = cfg.search.hole_support
     if share <= 0.0 or p.is_frame or p.is_line or len(p.outline) < 2:
         return False
-    labels = hole_labels(p.outline, p.origin, pf.vx, pf.vy, ctx.factor)
+    key = ("holes",) + p._features_key(ctx.factor, cfg)   # (once per pattern and scale)
+    if key not in p._cache:
+        p._cache[key] = hole_labels(p.outline, p.origin, pf.vx, pf.vy, ctx.factor)
+    labels = p._cache[key]
     if labels is None:
         return False
     ids, _ = match(c.fit.pose, pf.vx, pf.vy, pf.vangle, ctx.features.edges, ctx.features.index,

@@ -211,9 +211,11 @@ def list_frames(frames) -> list:
     if len(items) == 1 and isinstance(items[0], (str, os.PathLike)):
         p = Path(items[0])
         if p.is_dir():
-            entries = [f for f in p.iterdir() if not f.name.startswith(".")]
-            files = [f for f in entries if f.suffix.lower() in IMAGE_EXTENSIONS]
-            left = _not_read(entries)
+            with os.scandir(p) as it:
+                entries = [(e, os.path.splitext(e.name)[1].lower()) for e in it
+                           if not e.name.startswith(".")]
+            files = [Path(e.path) for e, ext in entries if ext in IMAGE_EXTENSIONS]
+            left = _not_read([(e, ext) for e, ext in entries if ext not in IMAGE_EXTENSIONS])
             if not files:
                 raise ParameterError(f"{printable(p)}: no image files "
                                      f"({', '.join(IMAGE_EXTENSIONS)}) in this folder"
@@ -252,22 +254,29 @@ def list_frames(frames) -> list:
 
 
 def _not_read(entries) -> str:
-    """What of a folder's ``entries`` is not a frame and may have been
-    meant as frames (subfolders: not searched; videos and other picture
-    formats), said in words; "" when nothing (other files: a navigation
-    log, notes, are no frames and go unsaid)."""
-    dirs = sorted(f for f in entries if f.suffix.lower() not in IMAGE_EXTENSIONS and f.is_dir())
+    """What of a folder's entries that are not images (``(os.DirEntry,
+    lower-case extension)`` pairs) may have been meant as frames, said in
+    words: subfolders (not searched), videos and other picture formats; ""
+    when none (other files, a navigation log or notes, are no frames and go
+    unsaid)."""
+    def is_dir(e) -> bool:
+        try:
+            return e.is_dir()    # (from the listing itself on most file systems: no stat)
+        except OSError:
+            return False
+
+    dirs = sorted(e.name for e, _ in entries if is_dir(e))
     kinds = []
     if dirs:
         kinds.append(f"{len(dirs)} subfolder{'s' * (len(dirs) > 1)} (folders are not "
-                     f"searched inside: give each folder, e.g. {printable(dirs[0].name)}, "
+                     f"searched inside: give each folder, e.g. {printable(dirs[0])}, "
                      "or a list of files)")
+    named = set(dirs)
     for what, exts in (("video", VIDEO_EXTENSIONS), ("other picture", OTHER_PICTURES)):
-        got = sorted({f.suffix.lower() for f in entries if f.suffix.lower() in exts
-                      and f not in dirs})
-        n = sum(f.suffix.lower() in exts and f not in dirs for f in entries)
-        if n:
-            kinds.append(f"{n} {what} file{'s' * (n > 1)} ({', '.join(got)})")
+        got = [ext for e, ext in entries if ext in exts and e.name not in named]
+        if got:
+            kinds.append(f"{len(got)} {what} file{'s' * (len(got) > 1)} "
+                         f"({', '.join(sorted(set(got)))})")
     return "; ".join(kinds)
 
 

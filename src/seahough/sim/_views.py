@@ -16,8 +16,9 @@ from .backgrounds import _load_image, _source_photo, seabed
 
 #: A photo magnified more than this to hold the views is said so (WARNING on
 #: the ``"seahough.sim"`` logger): its frames are an enlarged blur, with fewer
-#: edges than any camera would see (a 300-frame turn over a 640 px photo:
-#: 98 of 300 frames not measurable by the dead reckoning).
+#: edges than any camera would see (``seahough simulate sequence --n 300 --path
+#: turn``: a 576 px photo magnified 6.5x; 98 of 300 frames not measurable by
+#: the dead reckoning).
 MAGNIFY_NOTE = 2.0
 log = logging.getLogger("seahough.sim")
 
@@ -83,7 +84,7 @@ def _place_views(rng: np.random.Generator, image, source, views: list[tuple[np.n
     if u > MAGNIFY_NOTE:
         log.warning("note: the photo (%dx%d) is magnified %.1fx to hold every view (they "
                     "span %dx%d view pixels): the views are blurred by as much; give a larger "
-                    "photo, fewer frames, a smaller step, or a procedural seabed", pw, ph, u,
+                    "photo (or fewer, smaller or nearer views), or a procedural seabed", pw, ph, u,
                     math.ceil(bw), math.ceil(bh))
     # virtual = u * photo - t: the box [lo, hi] must lie in [-t, u * (size - 1) - t]
     tx_lo, tx_hi = -lo[0], u * (pw - 1) - hi[0]

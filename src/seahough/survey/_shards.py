@@ -164,6 +164,7 @@ class SurveyFolder:
         self.parts = self.path / PARTS
         self._record: dict = {}
         self._next = 0
+        self.moved = False      # (continued from another working folder than its own)
 
     def __enter__(self):
         return self
@@ -218,11 +219,10 @@ class SurveyFolder:
         old = rec["inputs"]
         if old.get("hash") == _digest(absolute) and old["count"] == len(paths):
             return False
+        if old["count"] < len(absolute) and _digest(absolute[:old["count"]]) == old.get("hash"):
+            return True
         what = f"{old['count']} images (now {len(paths)})"
         before = self._old_inputs(rec)
-        if (before is not None and len(before) == old["count"] < len(absolute)
-                and _digest(absolute[:len(before)]) == old.get("hash")):
-            return True
         if before is not None:
             i = next((k for k, (a, b) in enumerate(zip(before, absolute)) if a != b), None)
             if i is not None:
@@ -261,10 +261,10 @@ class SurveyFolder:
                     "another output folder")
             grown = self._check_inputs(rec, paths, absolute)
             self._record = rec
+            self.moved = os.path.abspath(rec.get("cwd") or os.getcwd()) != os.getcwd()
             if grown:   # the images added are searched, the survey is running again
-                rec.update(inputs={"count": len(paths), "hash": _digest(absolute)},
-                           state="running", counts=None, files={})
-                rec.pop("finished", None)
+                rec["inputs"] = {"count": len(paths), "hash": _digest(absolute)}
+                self._running_again()
         else:
             self._record = {
                 "format": FORMAT, "command": "survey detect", "seahough": __version__,
@@ -276,13 +276,33 @@ class SurveyFolder:
         self._mkparts()
         if rec is None:
             self._clear_parts()                 # a survey whose manifest was removed
-        if rec is None or grown:
+            self._write_manifest()
+        if rec is None or self._inputs_count() != len(paths):
+            # (after the manifest: a run stopped in between leaves a list that
+            # only error messages read, rewritten here by the next run; paths
+            # added from another working folder than the survey's are absolute)
+            listed = absolute if self.moved else paths
             self._write(self.parts / "inputs.parquet", pa.table(
                 {"index": pa.array(range(len(paths)), pa.int64()),
-                 "path": pa.array([_text(p) for p in paths], pa.string())}))
-            self._write_manifest()
+                 "path": pa.array([_text(p) for p in listed], pa.string())}))
         self._tidy()
         return self.done()
+
+    def _inputs_count(self) -> int:
+        try:
+            return pq.read_metadata(self.parts / "inputs.parquet").num_rows
+        except (OSError, pa.ArrowException):
+            return -1
+
+    def _running_again(self) -> None:
+        """The survey's state back to running (images to search: added, or to
+        retry), written before any shard changes; its two files, which no
+        longer hold every image, removed (the shards hold every row)."""
+        self._record.update(state="running", counts=None, files={})
+        self._record.pop("finished", None)
+        self._write_manifest()
+        for p in (self.images, self.detections):
+            self._remove(p)
 
     # ---------------------------------------------------------------- parts
     def _mkparts(self) -> None:
@@ -340,13 +360,11 @@ class SurveyFolder:
             bad = pc.equal(t.column("status"), "error")
             k = pc.sum(bad).as_py() or 0
             if k:
+                if not n and self._record.get("state") != "running":
+                    self._running_again()       # (before the first shard changes)
                 # (error rows have no detections: the detections shard stays)
                 self._write(p, t.filter(pc.invert(bad)))
                 n += k
-        if n and self._record.get("state") == "complete":
-            self._record.update(state="running", counts=None, files={})
-            self._record.pop("finished", None)
-            self._write_manifest()
         return n
 
     def done(self) -> set:

@@ -412,6 +412,8 @@ def detect(pattern, images, out, *, workers: int | None = None, scheduler: str |
     searched = 0
     with SurveyFolder(out) as folder:
         done = folder.start(settings, paths)
+        if folder.moved:    # (the rows' paths as the survey's list has them)
+            paths = [os.path.abspath(p) for p in paths]
         if retry_errors and folder.forget_errors():
             done = folder.done()
         todo = [i for i in range(len(paths)) if i not in done]
