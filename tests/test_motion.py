@@ -129,7 +129,7 @@ def test_repetitive_tiles_are_measured_coarse_to_fine_and_close_their_loops():
     _assert_answers_close_their_loops(shape, pair, skip, 0.025 * math.hypot(*shape))
 
 
-def test_a_tiled_floor_seen_from_above_is_measured_right_or_not_at_all():
+def test_a_tiled_floor_seen_from_above_is_measured_right_or_not_at_all(caplog):
     """A floor of tiles in two shades (sim.tiled_floor), seen from above:
     the previous frame one, two or four tiles off fits the grout lines as
     well as the true motion, and the vote kept one copy as if unique: 8 of
@@ -139,10 +139,14 @@ def test_a_tiled_floor_seen_from_above_is_measured_right_or_not_at_all():
     diagonal, most pairs measured (15 of 16)."""
     floor = S.tiled_floor((1400, 1800), seed=7, tile=24)
     right = wrong = 0
+    notes = []
     for seed in range(16):
         prev, cur, truth = S.frame_pair(floor, seed=seed)
-        m = seahough.estimate_motion(prev, cur)
+        with caplog.at_level("INFO", logger="seahough.motion"):
+            caplog.clear()
+            m = seahough.estimate_motion(prev, cur)
         if m is None:
+            notes += [r.getMessage() for r in caplog.records]
             continue
         h, w = prev.shape[:2]
         corners = np.array([[0, 0], [w, 0], [w, h], [0, h]], float)
@@ -150,6 +154,8 @@ def test_a_tiled_floor_seen_from_above_is_measured_right_or_not_at_all():
         right += err <= 3.0
         wrong += err > 0.03 * math.hypot(w, h)
     assert wrong == 0 and right >= 12, (right, wrong)
+    # a pair declined among its copies says so
+    assert notes and all("repeated texture" in n for n in notes if "under min_confidence" in n), notes
 
 
 def test_real_sequence_answers_are_right_or_none():

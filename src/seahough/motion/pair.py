@@ -127,6 +127,7 @@ class Motion:
     nfa: float = float("nan")
     parallax: float = float("nan")
     homography: np.ndarray | None = None
+    note: str = ""              # why its confidence was lowered, when it was
 
     def to_dict(self) -> dict:
         """Plain-Python form for JSON (``nfa`` None when not known).
@@ -290,6 +291,7 @@ class PairMeasure:
     nfa: float
     parallax: float = float("nan")
     homography: np.ndarray | None = None
+    note: str = ""              # why its confidence was lowered, when it was
 
     @classmethod
     def of(cls, check) -> "PairMeasure":
@@ -565,7 +567,8 @@ def declined(r: PairMeasure | None, min_confidence: float, min_score: float,
         if bad:
             rest = ", ".join(f"{k} {v:.3g}" for k, v in figures.items() if k != name)
             side = "over max_nfa" if name == "NFA" else f"under min_{name}"
-            return f"{name} {figures[name]:.3g} {side} {limit:.3g} ({rest})"
+            why = f": {r.note}" if r.note and name == "confidence" else ""
+            return f"{name} {figures[name]:.3g} {side} {limit:.3g} ({rest}){why}"
     return ""
 
 

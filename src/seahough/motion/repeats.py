@@ -230,6 +230,18 @@ def look_shift(prev: np.ndarray, cur: np.ndarray, work: np.ndarray, lag: int):
     return 2.0 * (bx - L), 2.0 * (by - L), best, second
 
 
+def declined_copy(m, got, decline: bool):
+    """``m`` with the confidence its edges leave it among its copies
+    (``got``: :func:`repeat_confidence`'s), and a note saying why; ``m``
+    itself when not ``decline``."""
+    if not decline:
+        return m
+    dx, dy = got[2][0]
+    return replace(m, confidence=got[1], note=(
+        f"a repeated texture: the answer moved by its period ({math.hypot(dx, dy):.0f} "
+        "working px) fits the edges about as well, and the grey levels do not choose"))
+
+
 def resolve(m, res, pattern: Pattern, config: Config, decline: bool = True, region=None):
     """A pair's answer ``m`` (a :class:`~.pair.PairMeasure`) over a repeated
     texture: when the current frame has periods and the answer moved by one
@@ -266,11 +278,11 @@ def resolve(m, res, pattern: Pattern, config: Config, decline: bool = True, regi
     hom = getattr(m, "homography", None)
     look = look_shift(prev, cur, work_matrix(mat if hom is None else hom, g.fx, g.fy), lag)
     if look is None:
-        return replace(m, confidence=got[1]) if decline else m
+        return declined_copy(m, got, decline)
     dx, dy, best, second = look
     margin = float(np.clip((best - second) / max(1e-9, 1.0 - second), 0.0, 1.0))
     if margin < MIN_LOOK_MARGIN:
-        return replace(m, confidence=got[1]) if decline else m
+        return declined_copy(m, got, decline)
     # the edges' copy: copies lie a period apart (a smaller shift is the blurred
     # grey levels' own imprecision, or a camera's perspective). The grey levels
     # confirm it, however well they correlate (two frames of a camera that looks
@@ -279,18 +291,18 @@ def resolve(m, res, pattern: Pattern, config: Config, decline: bool = True, regi
     if math.hypot(dx, dy) < 0.5 * period:
         return replace(m, confidence=max(got[1], min(m.confidence, margin)))
     if best < MIN_LOOK:
-        return replace(m, confidence=got[1]) if decline else m
+        return declined_copy(m, got, decline)
     pf = pattern.features(res.factor, config)
     fit = refine(Pose(pose.a, pose.b, pose.tx + dx, pose.ty + dy), pf.vx, pf.vy, pf.vangle,
                  feats.edges, feats.index, radii=(2.0, 1.5, 1.25), iterations=6,
                  angle_tol=math.radians(config.angle_tolerance), either=pattern.either,
                  score_radius=max(1.25, config.match_radius * res.factor))
     if in_view(fit) < MIN_COPY * got[0]:    # not a copy the edges agree with
-        return replace(m, confidence=got[1]) if decline else m
+        return declined_copy(m, got, decline)
     q = fit.pose
     fx, fy = (float(v) for v in g.to_full(q.tx, q.ty))
     if region is not None and not (region[0] <= fx <= region[2] and region[1] <= fy <= region[3]):
-        return replace(m, confidence=got[1]) if decline else m
+        return declined_copy(m, got, decline)
     full = np.array([[q.a, q.b, 0.0], [-q.b, q.a, 0.0]])
     full[:, 2] = [fx, fy] - full[:, :2] @ [ox, oy]
     if hom is not None:   # (the homography moved as the origin was, full-resolution px)
