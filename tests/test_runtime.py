@@ -241,6 +241,19 @@ def test_an_interruption_sent_twice_does_not_interrupt_the_saving():
 
     from seahough.cli import _Terminated, _catch_signals
 
+    # (a job started in the background, as `nohup ... &` starts a CI run,
+    # inherits SIGINT ignored, which _catch_signals rightly keeps ignored)
+    caller = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        _interrupted_twice(_catch_signals, _Terminated)
+    finally:
+        signal.signal(signal.SIGINT, caller)
+
+
+def _interrupted_twice(_catch_signals, _Terminated):
+    import os
+    import signal
+
     for first, second, kind in ((signal.SIGINT, signal.SIGINT, KeyboardInterrupt),
                                 (signal.SIGTERM, signal.SIGINT, _Terminated)):
         old = _catch_signals()
