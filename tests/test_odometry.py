@@ -320,21 +320,26 @@ def test_a_folder_says_what_it_does_not_read(tmp_path, caplog):
     # read were left out without a word; a navigation log is no frame
     for name in ("f1.png", "f2.png"):
         cv2.imwrite(str(tmp_path / name), np.zeros((16, 16), np.uint8))
-    for name in ("dive2", "dive3"):
+    for name in ("dive2", "dive3", "empty"):
         (tmp_path / name).mkdir()
+    for name in ("dive2", "dive3"):
+        cv2.imwrite(str(tmp_path / name / "g.png"), np.zeros((16, 16), np.uint8))
     for name in ("clip.mp4", "a.gif", "b.GIF", "nav.csv", ".hidden.gif"):
         (tmp_path / name).write_bytes(b"x")
     with caplog.at_level("WARNING", logger="seahough.io"):
         assert [Path(p).name for p in list_frames(tmp_path)] == ["f1.png", "f2.png"]
     (msg,) = [r.getMessage() for r in caplog.records]
-    assert msg.startswith(f"note: {tmp_path}: not read: 2 subfolders"), msg
-    assert "give each folder, e.g. dive2" in msg and "1 video file (.mp4)" in msg, msg
+    assert msg.startswith(f"note: {tmp_path}: not read: 2 subfolders of images, e.g. dive2 "
+                          "(a folder is not searched inside)"), msg
+    assert "1 video file (.mp4)" in msg, msg
     assert "2 other picture files (.gif)" in msg and "nav.csv" not in msg, msg
     # a folder with only subfolders: the error says where the images may be
-    top = tmp_path / "dive2"
+    top = tmp_path / "empty"
     (top / "cam0").mkdir()
+    (top / "cam1").mkdir()
+    cv2.imwrite(str(top / "cam0" / "a.png"), np.zeros((16, 16), np.uint8))
     with pytest.raises(seahough.ParameterError, match=r"no image files .*; not read: 1 "
-                                                      r"subfolder .*e\.g\. cam0"):
+                                                      r"subfolder of images, e\.g\. cam0"):
         list_frames(top)
     # nothing to say: no note
     caplog.clear()
@@ -932,3 +937,22 @@ def test_a_full_search_off_the_prior_is_checked_against_the_adjacent_frame(tmp_p
     step = np.asarray(row["pair_matrix"], float).reshape(2, 3)
     pair = seahough.estimate_motion(frames[7], frames[8])
     assert corner_gap(step, pair.matrix, frames[0].shape) < 0.01 * diag
+
+
+def test_an_nfa_limit_is_a_choice_of_the_dead_reckoning(tmp_path):
+    # frames enlarged into a blur (a small photo over a long turn): some pairs
+    # are measured at an NFA over 1. Reported, not judged by default (there
+    # they were as often right as wrong); OdometryTuning(max_nfa=1) flags them
+    photo = S.seabed((72, 108), seed=1)
+    frames, _ = S.sequence(photo, n_frames=30, frame_size=(180, 240), path="turn", step=9,
+                           seed=0)
+    runs = {}
+    for mx in (math.inf, 1.0):
+        rows = run_odometry(frames, tmp_path / str(mx), progress=False, mosaic=False, workers=1,
+                            tuning=seahough.OdometryTuning(max_nfa=mx)).rows[1:]
+        runs[mx] = rows
+    weak = [r["index"] for r in runs[math.inf] if r["status"] == "measured" and r["nfa"] > 1.0]
+    assert weak and not any(r["flags"] for r in runs[math.inf]), weak
+    strict = {r["index"]: r for r in runs[1.0]}
+    assert all(r["nfa"] <= 1.0 for r in strict.values() if r["status"] == "measured")
+    assert any(strict[i]["status"] == "assumed" for i in weak), weak

@@ -25,7 +25,7 @@ __version__ = "0.1.0"
 
 #: Public name -> the module (relative to this package) that defines it.
 _WHERE = {
-    "Config": ".config", "OdometryTuning": ".config",
+    "Config": ".config", "OdometryTuning": ".config", "SearchTuning": ".config",
     "Detection": ".core.detector", "Detector": ".core.detector", "SearchResult": ".core.detector",
     "Pattern": ".core.pattern",
     "Curve": ".core.curves", "find_curves": ".core.curves",
@@ -46,7 +46,7 @@ _SUBMODULES = ("cli", "config", "core", "demo", "errors", "geometry", "io", "mot
 
 __all__ = [
     "Config", "Detection", "Detector", "SearchResult", "Pattern", "Motion", "estimate_motion",
-    "run_odometry", "list_frames", "OdometryResult", "OdometryTuning",
+    "run_odometry", "list_frames", "OdometryResult", "OdometryTuning", "SearchTuning",
     "Similarity", "pose_to_matrix", "matrix_to_pose", "solve_segment_pair", "read_image", "to_gray",
     "SeahoughError", "ImageError", "ImageReadError", "ImageSizeError", "ImageValueError",
     "ParameterError", "PatternError", "WriteError", "__version__",
@@ -75,7 +75,7 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs only
-    from .config import Config, OdometryTuning
+    from .config import Config, OdometryTuning, SearchTuning
     from .core.detector import Detection, Detector, SearchResult
     from .core.pattern import Pattern
     from .core.curves import Curve, find_curves

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import number
+from ._validate import check_max_nfa, number
 from .errors import ParameterError
 
 #: Largest Config.local_window (working pixels).
@@ -433,6 +434,17 @@ class OdometryTuning:
         ... which replaces it when they differ by more than this many working
         pixels at the frame's corners (beyond a measurement's noise) and it
         is the adjacent frame, or more confident.
+    max_nfa : float
+        A measurement whose number of false alarms (:attr:`Motion.nfa`) is
+        over this is no match (flagged ``no_match``); ``math.inf``, the
+        default: not judged. Real pairs measure at 1e-30 and far below;
+        frames enlarged into a blur (a small photo simulated over a long
+        path) at up to 1e7 for half their pairs, but there the steps over 1
+        were as often right as wrong (40 frames of a procedural photo
+        magnified 5.7x: 16 steps over 1, all within 3 px of the truth;
+        a 300-frame turn magnified 6.5x: steps 1.16x too long, flagged at
+        1, its end point then farther off), so it is a choice, not a
+        default.
 
     Examples
     --------
@@ -455,8 +467,13 @@ class OdometryTuning:
     max_span: int = 3
     doubtful: float = 0.35
     agree_px: float = 2.0
+    max_nfa: float = math.inf
 
     def __post_init__(self) -> None:
+        try:
+            check_max_nfa(self.max_nfa)
+        except ParameterError as e:
+            raise ParameterError(f"OdometryTuning.{e}") from None
         _check_fields(self, "OdometryTuning",
                       shares=("min_confidence", "min_relative", "min_score", "min_overlap",
                               "rekey_overlap", "rekey_match", "prior_radius", "full_shift",

@@ -282,7 +282,7 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     a shape (pixels):
       rect:W,H           a filled rectangle (the paper's marker)
       line:LENGTH,WIDTH  a rope, cable or pipe: reports its angle and offset
-      circle:R           a disc;  circle:R,INNER  a ring
+      circle:R           a disc;  circle:R,INNER (or ring:R,INNER)  a ring
       polygon:x1,y1,x2,y2,x3,y3,...
       polyline:WIDTH:x1,y1,x2,y2,...  open strips WIDTH wide along the
                          points, e.g. a gate: polyline:6:0,80,0,0,60,0,60,80

@@ -87,7 +87,7 @@ def detect(pattern, inputs, out, workers, scheduler, batch_size, retry_errors, a
     """Find PATTERN in every image of INPUT... (a survey).
 
     \b
-    INPUT is an image file, a folder (its images, in name order, or in the
+    INPUT is an image file, a folder (its images, in natural name order, or in the
     order of the timestamps in their names; not its subfolders, which a
     note names), or @LIST.txt: a file of paths,
     one a line (a shell cannot pass 100,000 names); a file or folder given

@@ -213,7 +213,12 @@ def polyline(cls, points, width, *, polarity="bright", margin=6.0):
 
 # ------------------------------------------- primitive shapes (Pattern.circle, .line)
 def circle(cls, radius, inner_radius=None, *, polarity="bright", margin=6.0):
-    """A filled disc, or a ring when ``inner_radius`` is given."""
+    """A filled disc, or a ring when ``inner_radius`` is given.
+
+    A ring is not reported where its inner circle is not seen (a disc the
+    size of its outer one matches 62 % of its points):
+    ``Config(search=SearchTuning(hole_support=...))``, 0 to report it.
+    """
     from .pattern import MIN_SHAPE_SIZE, _check_positive
     _check_positive(radius=radius)
     r = float(radius)

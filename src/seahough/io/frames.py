@@ -256,22 +256,30 @@ def list_frames(frames) -> list:
 def _not_read(entries) -> str:
     """What of a folder's entries that are not images (``(os.DirEntry,
     lower-case extension)`` pairs) may have been meant as frames, said in
-    words: subfolders (not searched), videos and other picture formats; ""
-    when none (other files, a navigation log or notes, are no frames and go
-    unsaid)."""
+    words: subfolders holding images (not searched), videos and other
+    picture formats; "" when none (other files, a navigation log or notes,
+    and folders without images are no frames and go unsaid)."""
     def is_dir(e) -> bool:
         try:
             return e.is_dir()    # (from the listing itself on most file systems: no stat)
         except OSError:
             return False
 
-    dirs = sorted(e.name for e, _ in entries if is_dir(e))
+    def has_images(path) -> bool:
+        try:
+            with os.scandir(path) as it:
+                return any(os.path.splitext(f.name)[1].lower() in IMAGE_EXTENSIONS
+                           and not f.name.startswith(".") for f in it)
+        except OSError:
+            return False
+
+    subs = [e for e, _ in entries if is_dir(e)]
+    named = {e.name for e in subs}
+    dirs = sorted(e.name for e in subs[:1000] if has_images(e.path))   # (a bounded look)
     kinds = []
     if dirs:
-        kinds.append(f"{len(dirs)} subfolder{'s' * (len(dirs) > 1)} (folders are not "
-                     f"searched inside: give each folder, e.g. {printable(dirs[0])}, "
-                     "or a list of files)")
-    named = set(dirs)
+        kinds.append(f"{len(dirs)} subfolder{'s' * (len(dirs) > 1)} of images, e.g. "
+                     f"{printable(dirs[0])} (a folder is not searched inside)")
     for what, exts in (("video", VIDEO_EXTENSIONS), ("other picture", OTHER_PICTURES)):
         got = [ext for e, ext in entries if ext in exts and e.name not in named]
         if got:

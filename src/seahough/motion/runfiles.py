@@ -19,6 +19,7 @@ from __future__ import annotations
 import errno
 import hashlib
 import json
+import math
 import os
 import stat
 from dataclasses import asdict
@@ -59,11 +60,14 @@ def run_settings(scale_range, angle_range, metres_per_pixel, config, tuning) -> 
     ([0.9, 1.1], [-20.0, 20.0], None, 2)
     """
     cfg = config_record(config)
+    tune = asdict(tuning)
+    if tune.get("max_nfa") == math.inf:   # (added later: runs made before can be resumed)
+        tune.pop("max_nfa")
     return {"format": SETTINGS_FORMAT,
             "scale_range": [float(v) for v in scale_range],
             "angle_range": [float(v) for v in angle_range],
             "metres_per_pixel": None if metres_per_pixel is None else float(metres_per_pixel),
-            "config": cfg, "tuning": asdict(tuning)}
+            "config": cfg, "tuning": tune}
 
 
 def settings_hash(settings: dict) -> str:

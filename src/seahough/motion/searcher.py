@@ -5,7 +5,8 @@ their content box, each judged by the run's acceptance checks.
 A pair that is not accepted comes back with the reason it failed:
 
 - ``no_match``: no pose of the reference frame was found in the current
-  one (no accumulator peak with enough of its edges, the reference has no
+  one (no accumulator peak with enough of its edges, or its NFA over
+  ``OdometryTuning.max_nfa`` when one is given; the reference has no
   edges to search for, or the prior window cut the true peak off);
 - ``low_confidence``: a pose was found, but it is not distinct from its
   runner-up, or its edges in view match far worse than in the last
@@ -56,7 +57,7 @@ class Measure:
     overlap: float
     ref: int
     method: str
-    nfa: float = float("nan")   # reported (odometry's decisions do not use it)
+    nfa: float = float("nan")   # (judged only against OdometryTuning.max_nfa)
 
 
 class Searcher:
@@ -197,7 +198,7 @@ class Searcher:
                           rescue=predicted is None, adjacent=adjacent)
         except SeahoughError:
             d = None
-        if d is None or d.score < t.min_score:
+        if d is None or d.score < t.min_score or d.nfa > t.max_nfa:
             return None, "no_match"
         m = d.matrix
         ov = overlap(m, w, h)
