@@ -61,6 +61,11 @@ def _correlate(fa: np.ndarray, fb: np.ndarray) -> np.ndarray:
                     flags=cv2.DFT_REAL_OUTPUT | cv2.DFT_SCALE)
 
 
+#: The gradient magnitude is clipped at this quantile before its periods are
+#: read (:func:`periods`).
+CLIP = 0.9
+
+
 def periods(magnitude: np.ndarray, n: int = N_PERIODS, min_lag: float = MIN_LAG) -> np.ndarray:
     """The shifts (dx, dy), working pixels, by which the image ``magnitude``
     (a gradient magnitude) most resembles itself: the highest local maxima
@@ -76,6 +81,12 @@ def periods(magnitude: np.ndarray, n: int = N_PERIODS, min_lag: float = MIN_LAG)
     [(0, 12), (16, 0)]
     """
     m = np.asarray(magnitude, np.float32)
+    # clipped at its CLIP quantile: the specks of marine snow and the noise of
+    # hard water are the strongest gradients of a frame, and their spikes
+    # drowned a tiled floor's periods (none found in 5 of 5 hard-water pairs)
+    # (of the non-zero values: a sparse image keeps its own)
+    nz = m[m > 0]
+    m = np.minimum(m, np.float32(np.quantile(nz, CLIP))) if nz.size else m
     if min(m.shape) >= 2 * HALF_FROM:   # at half resolution (a quarter of the time), once
         half = cv2.resize(m, (m.shape[1] // 2, m.shape[0] // 2), interpolation=cv2.INTER_AREA)
         return 2.0 * _periods(half, n, 0.75 * min_lag)   # (6 px: a 16 px tile at 0.5)
