@@ -83,7 +83,7 @@ def periods(magnitude: np.ndarray, n: int = N_PERIODS, min_lag: float = MIN_LAG)
     m = np.asarray(magnitude, np.float32)
     # clipped at its CLIP quantile: the specks of marine snow and the noise of
     # hard water are the strongest gradients of a frame, and their spikes
-    # drowned a tiled floor's periods (none found in 5 of 5 hard-water pairs)
+    # drowned a tiled floor's periods (none found in 5 hard-water pairs)
     # (of the non-zero values: a sparse image keeps its own)
     nz = m[m > 0]
     m = np.minimum(m, np.float32(np.quantile(nz, CLIP))) if nz.size else m
@@ -155,8 +155,9 @@ def repeat_confidence(pattern: Pattern, features: Features, factor: float, pose:
     ``keep``: the confidence the answer has; a copy that could not bring
     the confidence under it (its fit on the subset :data:`SCREEN_MARGIN`
     under the score that would) is only fitted on the subset, which then
-    stands for its score (on the amphora wreck, whose frames have periods
-    of their own, 8 copies a pair, that saves about 6 ms of a 50 ms pair).
+    stands for its score (the same answers on the 106 real pairs, whose
+    frames have periods of their own: 8 copies a pair on the amphora wreck;
+    about 2 ms less of a 50 ms real pair, 10 ms of a tiled floor's).
     """
     shifts = periods(features.gradients.magnitude)
     if not len(shifts):
