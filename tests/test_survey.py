@@ -230,7 +230,7 @@ def test_errors_retried_and_more_images_added(scenes, cluster, tmp_path, capsys)
     assert "images: 7   found: 7" in outp and "searched 1 image " in outp
 
 
-def test_interrupted_run_continues(scenes, cluster, tmp_path, monkeypatch):
+def test_interrupted_run_continues(scenes, cluster, tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(SD, "SHARD_IMAGES", 2)
     inputs = [str(scenes / "imgs" / f"s{i % N}.png") for i in range(12)]
     out = tmp_path / "out"
@@ -248,6 +248,17 @@ def test_interrupted_run_continues(scenes, cluster, tmp_path, monkeypatch):
     assert json.loads((out / "survey.json").read_text())["state"] == "running"
     kept = sum(pq.read_table(p).num_rows for p in (out / "parts").glob("images-*.parquet"))
     assert kept == 5
+    # the command line says what was kept, in its one line
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(SD, "detect", interrupted)
+    code, _, err = _cli(capsys, "detect", scenes / "pattern.png", *inputs, "--out", out)
+    assert code == 130 and err == (f"\nseahough: error: interrupted: 5 of 12 images searched "
+                                   f"and kept in {out}; the same command goes on with the "
+                                   "others\n"), err
+    monkeypatch.undo()
+    monkeypatch.setattr(SD, "SHARD_IMAGES", 2)
     # what a killed client leaves: a half-written shard and a shard without its mark
     (out / "parts" / "images-000099.parquet.tmp").write_bytes(b"half")
     (out / "parts" / "detections-000098.parquet").write_bytes(b"orphan")

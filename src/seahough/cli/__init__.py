@@ -232,8 +232,11 @@ def _run(argv) -> int:
     except _Terminated:
         _err(_TERM_MESSAGE)
         rv = 143
-    except (click.exceptions.Abort, KeyboardInterrupt):
-        _err("interrupted")
+    except (click.exceptions.Abort, KeyboardInterrupt) as e:
+        # (a command may say what it kept: a survey's images searched)
+        ki = e if isinstance(e, KeyboardInterrupt) else e.__cause__   # (click's Abort wraps it)
+        said = ki.args[0] if isinstance(ki, KeyboardInterrupt) and ki.args else ""
+        _err(f"interrupted: {said}" if said else "interrupted")
         rv = 130
     except SystemError as e:
         # Ctrl-C inside a compiled (Numba) kernel: the KeyboardInterrupt is

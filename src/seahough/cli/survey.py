@@ -59,6 +59,20 @@ def survey():
     """
 
 
+def _kept(out) -> str:
+    """What an interrupted survey in ``out`` kept, in words ("" when unknown)."""
+    import pyarrow.parquet as pq
+
+    try:
+        total = json.loads((Path(out) / "survey.json").read_text())["inputs"]["count"]
+        done = sum(pq.read_metadata(p).num_rows
+                   for p in (Path(out) / "parts").glob("images-*.parquet"))
+    except (OSError, ValueError, KeyError, TypeError, ImportError):
+        return ""
+    return (f"{done} of {total} images searched and kept in {printable(out)}; the same "
+            "command goes on with the others")
+
+
 def _errors(images_path: Path, limit: int) -> list[tuple[str, str]]:
     """The first ``limit`` error rows of images.parquet: (path, error)."""
     import pyarrow.parquet as pq
@@ -118,8 +132,9 @@ def detect(pattern, inputs, out, workers, scheduler, batch_size, retry_errors, a
     Exit status: 0 every image was searched (found or not: see the counts);
     1 some images could not be read (rows with status "error", the first
     listed); 2 bad input (parameters, no images, --out, --scheduler); 130
-    interrupted (Ctrl-C), 143 terminated (SIGTERM): the images searched are
-    kept, and the same command goes on where it stopped.
+    interrupted (Ctrl-C: the line says how many images were kept), 143
+    terminated (SIGTERM): the images searched are kept, and the same
+    command goes on where it stopped.
 
     \b
     Example:
@@ -136,9 +151,13 @@ def detect(pattern, inputs, out, workers, scheduler, batch_size, retry_errors, a
     for item in inputs:
         if not item.startswith("@") and not Path(item).exists():
             raise _Fail(f"{printable(item)}: no such file or folder")
-    result = run_survey(detector, list(inputs), out, workers=workers, scheduler=scheduler,
-                        batch_size=batch_size, progress=not quiet and _stderr_is_terminal(),
-                        retry_errors=retry_errors)
+    try:
+        result = run_survey(detector, list(inputs), out, workers=workers,
+                            scheduler=scheduler, batch_size=batch_size,
+                            progress=not quiet and _stderr_is_terminal(),
+                            retry_errors=retry_errors)
+    except KeyboardInterrupt:
+        raise KeyboardInterrupt(_kept(out)) from None
     errors = _errors(result.images, SHOW_ERRORS) if result.errors else []
     summary = {"images": result.total, "found": result.found, "not_found": result.not_found,
                "errors": result.errors, "detections": result.n_detections,
