@@ -95,6 +95,26 @@ def test_a_disc_is_not_a_ring():
     assert found == {"disc": 0, "ring": 4, "disc, unchecked": 4}, found
 
 
+def test_a_declined_candidate_says_why():
+    # the disc's pose, declined for the ring's unseen hole, leaves its trace
+    ring = seahough.Pattern.circle(40, inner_radius=25)
+    disc = seahough.Pattern.circle(40)
+    scene, truth = _scene(disc.image, _coverage(disc), 40, scale_range=(0.6, 1.4), hide=0.0)
+    res = seahough.Detector(ring, scale_range=(0.5, 2.0)).search(scene)
+    assert res.detections == []
+    why = [c.declined for c in res.candidates if c.full is not None
+           and math.hypot(c.full.pose.tx - truth.x, c.full.pose.ty - truth.y) < 3]
+    assert why and why[0].startswith("its hole is not in the image"), why
+    # every candidate not reported says why; a detection says nothing
+    scene, truth = _scene(ring.image, _coverage(ring), 41, scale_range=(0.6, 1.4), hide=0.0)
+    res = seahough.Detector(ring, scale_range=(0.5, 2.0), max_results=1).search(scene)
+    assert len(res.detections) == 1
+    reported = [c for c in res.candidates if not c.declined]
+    assert len(reported) == 1 and len(res.candidates) > 1
+    assert abs(reported[0].full.score - res.detections[0].score) < 1e-9
+    assert all(c.declined for c in res.candidates if c is not reported[0])
+
+
 @pytest.mark.parametrize("name", S.MARKERS)
 def test_image_pattern_markers_found_in_moderate_water(name):
     img, mask = S.marker(name, 120)

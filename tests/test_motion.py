@@ -68,6 +68,14 @@ def test_a_declined_pair_names_the_threshold_it_missed(caplog):
     assert "over max_nfa 1e-320" in msgs[1], msgs[1]
 
 
+def test_a_blank_current_frame_is_named_as_such(caplog):
+    prev = S.seabed((240, 320), seed=1)
+    with caplog.at_level("INFO", logger="seahough.motion"):
+        assert seahough.estimate_motion(prev, np.full((240, 320), 90, np.uint8)) is None
+    (why,) = [r.getMessage() for r in caplog.records if r.name == "seahough.motion"]
+    assert why.startswith("no motion: the current frame has no edges to match"), why
+
+
 def test_frames_of_different_sizes_are_refused():
     with pytest.raises(seahough.ParameterError, match="differ in size"):
         seahough.estimate_motion(S.seabed((240, 320), seed=1), S.seabed((200, 320), seed=1))

@@ -37,6 +37,9 @@ class Candidate:
     work_score: float         # score at the working scale
     full: Fit | None = None   # the full-resolution finish (ranking)
     evidence: Evidence | None = None  # its number of false alarms (ranking)
+    #: why :func:`~.ranking.rank` did not report it, with its figures (e.g.
+    #: "NFA 3.2 over max_nfa 1"); "" for a detection
+    declined: str = ""
 
 
 @dataclass(frozen=True)

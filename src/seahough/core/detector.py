@@ -59,7 +59,9 @@ class SearchResult:
     ``note`` says why a search stopped before voting (its detections are
     then empty): one of :data:`SEARCH_NOTES`. ``planes`` and ``features``
     may then be None. ``candidates`` are the refined candidate poses
-    (:class:`~.candidates.Candidate`), best first. For a Detector of several
+    (:class:`~.candidates.Candidate`), best first; one not reported says
+    why in its ``declined`` (e.g. a disc's pose for a ring: "its hole is not
+    in the image"). For a Detector of several
     patterns, ``parts`` holds each pattern's own result by name (``planes``
     and ``features`` are then those of the best detection's pattern, or of
     the first pattern when none is found; ``planes.pattern`` names it).

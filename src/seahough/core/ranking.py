@@ -367,12 +367,17 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
     ``gray`` is the full-resolution working image: grey, or BGR when the
     search is in colour (``Config.colour``).
 
-    Returns the detections, best first (``[]``: not found).
+    Returns the detections, best first (``[]``: not found). Each candidate
+    not reported says why in :attr:`~.candidates.Candidate.declined`.
     """
     cmp = ctx.compare
     best = max((c.work_score for c in cands), default=0.0)
     pre = max(0.85 * ctx.min_score, 0.6 * best)  # only those that could win
     todo = [c for c in cands if c.work_score >= pre][: ctx.max_results + 2]
+    for c in cands:
+        if not any(c is t for t in todo):
+            c.declined = (f"working-scale score {c.work_score:.3g}: not among the "
+                          f"{ctx.max_results + 2} best over {pre:.3g}, not finished")
     turns = () if ctx.angle_known else ctx.pattern.near_turns(ctx.config)
     alts = [_alternatives(ctx, c, turns) for c in todo]
     wheres = (_full_edges(ctx, gray, todo, alts) if todo and ctx.factor < 0.999
@@ -387,15 +392,24 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
     other_object: list[Candidate] = []   # (a disc for a ring: no rival of the ring)
     for c in todo:
         if len(accepted) >= ctx.max_results:
-            break
-        if c.full.score < ctx.min_score or not cmp.pose_ok(c.full.pose):
+            c.declined = f"max_results {ctx.max_results} already found"
+            continue
+        if c.full.score < ctx.min_score:
+            c.declined = f"score {c.full.score:.3g} under min_score {ctx.min_score:.3g}"
+            continue
+        if not cmp.pose_ok(c.full.pose):
+            c.declined = f"scale {c.full.pose.scale:.3g} outside the searched range"
             continue
         if any(cmp.same(c.full.pose, a.full.pose, 1.0) for a in accepted):
+            c.declined = "the same object as a better detection"
             continue
         judge(ctx, c)  # (only those that could be accepted: it costs a little)
         if c.evidence.nfa > ctx.max_nfa:
+            c.declined = f"NFA {c.evidence.nfa:.3g} over max_nfa {ctx.max_nfa:.3g}"
             continue
         if _unseen_hole(ctx, c):
+            c.declined = (f"its hole is not in the image (hole support under "
+                          f"{ctx.config.search.hole_support:.3g} of the whole's)")
             other_object.append(c)
             continue
         accepted.append(c)
@@ -412,6 +426,7 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
     for c in accepted:
         conf = confidence(c.work_score, runner_up)
         if conf < min_confidence:
+            c.declined = f"confidence {conf:.3g} under min_confidence {min_confidence:.3g}"
             continue
         dets.append(to_detection(ctx, c, conf, gray.shape))
     dets.sort(key=lambda d: -d.score)

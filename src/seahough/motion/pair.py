@@ -308,7 +308,8 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
                  min_score: float, min_confidence: float, config: Config,
                  features: Features | None = None, rescue: bool = True,
                  tiles: bool = False, perspective: bool = True,
-                 coarse: bool = True, decline_repeats: bool = True) -> PairMeasure | None:
+                 coarse: bool = True, decline_repeats: bool = True,
+                 notes: list | None = None) -> PairMeasure | None:
     """The search that measures a pair: the previous frame (``pattern``) in the
     current one (``gray``, a checked grey image as :func:`~seahough.to_gray`
     gives), its centre within ``region`` (x0, y0, x1, y1; current-frame
@@ -359,11 +360,16 @@ def measure_pair(pattern: Pattern, gray: np.ndarray, scale_range, angle_range, r
     keyframe a few frames back, it confirmed look-alikes a tile or two off
     (28 and 85 px at confidence 0.39-0.41, where the adjacent pairs agree on
     a few px).
+
+    ``notes``, a list, receives why the search stopped before voting (the
+    current frame has no edges: :data:`~seahough.core.detector.SEARCH_NOTES`).
     """
     det = Detector(pattern, scale_range, angle_range, config=config, max_results=1,
                    min_score=min_score, min_confidence=0.0, max_nfa=math.inf,
                    search_region=region)
     res = det.search(gray, features=features)
+    if res.note and notes is not None:
+        notes.append(res.note)
     d = res.detections[0] if res.detections else None
     # a repeated texture's look-alikes (repeats.py; not around a prediction:
     # the copy nearest it is the answer)
@@ -536,10 +542,11 @@ def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
     check_motion_size((h, w))
     ox, oy = pattern.origin
     region = (ox - max_shift * w, oy - max_shift * h, ox + max_shift * w, oy + max_shift * h)
+    notes: list = []
     r = measure_pair(pattern, cur, scale_range, angle_range, region, min_score=min_score,
                      min_confidence=min_confidence, config=cfg, features=features,
-                     tiles=homography)
-    why = declined(r, min_confidence, min_score, max_nfa)
+                     tiles=homography, notes=notes)
+    why = declined(r, min_confidence, min_score, max_nfa, notes[0] if notes else "")
     if why:
         log.info("no motion: %s", why)
         return None
@@ -549,17 +556,24 @@ def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
 
 
 def declined(r: PairMeasure | None, min_confidence: float, min_score: float,
-             max_nfa: float) -> str:
-    """Why a pair's best measurement ``r`` is not reported ("" when it is).
+             max_nfa: float, stopped: str = "") -> str:
+    """Why a pair's best measurement ``r`` is not reported ("" when it is);
+    ``stopped``: why the search stopped early, when it did
+    (``SearchResult.note``).
 
     >>> m = PairMeasure(np.eye(2, 3), confidence=0.1, score=0.4, nfa=1e-9)
     >>> declined(m, 0.15, 0.15, 1.0)
     'confidence 0.1 under min_confidence 0.15 (score 0.4, NFA 1e-09)'
     >>> declined(None, 0.15, 0.15, 1.0)
     'no pose of the previous frame found in the current one'
+    >>> declined(None, 0.15, 0.15, 1.0, "no edges")
+    'the current frame has no edges to match (blank, dark, overexposed or out of focus?)'
     """
+    if r is None and stopped == "no edges":
+        return "the current frame has no edges to match (blank, dark, overexposed or out of focus?)"
     if r is None:
-        return "no pose of the previous frame found in the current one"
+        why = f" (the search stopped: {stopped})" if stopped else ""
+        return "no pose of the previous frame found in the current one" + why
     figures = {"confidence": r.confidence, "score": r.score, "NFA": r.nfa}
     for name, limit, bad in (("confidence", min_confidence, r.confidence < min_confidence),
                              ("score", min_score, r.score < min_score),
