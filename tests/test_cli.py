@@ -625,6 +625,33 @@ def test_simulate_progress_bar_and_quiet(tmp_path):
     assert rc == 0 and "/4 [" in tty, tty
 
 
+def test_simulate_from_a_photo_of_ones_own(tmp_path):
+    photo = tmp_path / "floor.png"
+    cv2.imwrite(str(photo), sim.seabed((240, 320), seed=3))
+    # a long turn over a small photo: the note says it is magnified, -q keeps it quiet
+    args = ("simulate", "sequence", "--n", 60, "--path", "turn", "--size", 160, 120,
+            "--photo", photo)
+    proc = run(*args, "--out", tmp_path / "a")
+    assert proc.returncode == 0, proc.stderr
+    assert "note: the photo (320x240) is magnified" in proc.stderr, proc.stderr
+    proc = run(*args, "--out", tmp_path / "b", "-q")
+    assert proc.returncode == 0 and proc.stderr == "", proc.stderr
+    truth = json.loads((tmp_path / "b" / "truth.json").read_text())
+    assert truth["source"] == str(photo)
+    # the views are of that photo: the first frame is where the simulator puts it
+    frames, _ = sim.sequence(cv2.imread(str(photo)), n_frames=60, frame_size=(120, 160),
+                             path="turn", water="moderate", seed=0)
+    assert np.array_equal(cv2.imread(str(tmp_path / "b" / "frame_000.png")), frames[0])
+    proc = run("simulate", "pair", "--out", tmp_path / "c", "--photo", photo, "-q")
+    assert proc.returncode == 0, proc.stderr
+    # a photo that cannot be read, or given with --procedural: one line, nothing written
+    proc = run("simulate", "pair", "--out", tmp_path / "d", "--photo", tmp_path / "none.jpg")
+    assert_one_error_line(proc, "none.jpg: no such file")
+    proc = run("simulate", "pair", "--out", tmp_path / "e", "--photo", photo, "--procedural")
+    assert_one_error_line(proc, "photo and procedural")
+    assert not (tmp_path / "d" / "truth.json").exists() and not (tmp_path / "e" / "truth.json").exists()
+
+
 @pytest.fixture(scope="module")
 def sequence_dir(tmp_path_factory):
     """A short simulated sequence, written by `seahough simulate`."""

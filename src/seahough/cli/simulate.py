@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import logging
+
 import click
 
 from ..sim import MARKERS
@@ -28,9 +30,13 @@ from ._common import PROG, _out_dir
 @click.option("--procedural", is_flag=True,
               help="Procedural seabed backgrounds only (default: real photos when the shared "
               "data folder is present).")
+@click.option("--photo", type=click.Path(dir_okay=False), default=None, metavar="FILE",
+              help="A seabed photo of yours to render the scenes from (a larger photo holds "
+              "a long sequence's views without magnifying them).")
 @click.option("--quiet", "-q", is_flag=True,
-              help="No progress bar or hint; only the line saying what was written.")
-def simulate(kind, out, count, seed, water, marker_name, size, path_kind, procedural, quiet):
+              help="No progress bar, hint or note; only the line saying what was written.")
+def simulate(kind, out, count, seed, water, marker_name, size, path_kind, procedural, photo,
+             quiet):
     """Write synthetic underwater scenes with exact ground truth.
 
     \b
@@ -49,9 +55,17 @@ def simulate(kind, out, count, seed, water, marker_name, size, path_kind, proced
     """
     o = _out_dir(out)
     # a scene that cannot be written raises a SeahoughError: main() prints its one line
-    truth = write_simulation(kind, o, n=count, seed=seed, water=water, marker_name=marker_name,
-                             size=tuple(size) if size else None, path=path_kind,
-                             procedural=procedural, progress=not quiet)
+    notes = logging.getLogger("seahough.sim")
+    level = notes.level
+    if quiet:   # (the note that a photo is magnified: a warning, not an error)
+        notes.setLevel(logging.ERROR)
+    try:
+        truth = write_simulation(kind, o, n=count, seed=seed, water=water,
+                                 marker_name=marker_name, size=tuple(size) if size else None,
+                                 path=path_kind, procedural=procedural, photo=photo,
+                                 progress=not quiet)
+    finally:
+        notes.setLevel(level)
     n_files = len(truth.get("frames", truth.get("scenes", [])))
     what = "frames" if kind == "sequence" else ("pairs" if kind == "pair" else "scenes")
     what = what[:-1] if n_files == 1 else what

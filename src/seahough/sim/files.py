@@ -18,7 +18,7 @@ import numpy as np
 from .._validate import number
 from ..errors import ParameterError, WriteError
 from ..geometry import apply_matrix, compose, invert_matrix, wrap_angle
-from ..io.images import write_image
+from ..io.images import read_image, to_bgr8, write_image
 from .markers import MARKERS, marker
 from .scenes import frame_pair, marker_scene, negative_scene, rope_scene
 from .sequences import sequence
@@ -61,7 +61,7 @@ def _truth_dict(truth) -> dict:
 def write_simulation(kind: str, out, *, n: int | None = None, seed: int = 0,
                      water: str = "moderate", marker_name: str = "board",
                      size: tuple[int, int] | None = None, path: str = "line",
-                     procedural: bool = False, progress: bool = False) -> dict:
+                     procedural: bool = False, photo=None, progress: bool = False) -> dict:
     """Write ``n`` simulated scenes of ``kind`` and their ``truth.json`` into ``out``.
 
     Parameters
@@ -92,6 +92,13 @@ def write_simulation(kind: str, out, *, n: int | None = None, seed: int = 0,
     procedural : bool
         Procedural seabed backgrounds only (default: real photos when the
         shared data folder is present).
+    photo : str or path-like, optional
+        A seabed photo of one's own to render every scene from (not with
+        ``procedural``): a sequence or a pair is a camera's views of it, a
+        marker or a rope lies on crops of it. A photo larger than the views
+        need is not magnified (a sequence along a long path spans more than
+        its frames: a photo magnified more than 2x to hold them is said so on
+        the ``"seahough.sim"`` logger).
     progress : bool
         A progress bar on stderr (drawn only when it is a terminal) for more
         than one scene or frame.
@@ -109,6 +116,8 @@ def write_simulation(kind: str, out, *, n: int | None = None, seed: int = 0,
     ------
     ParameterError
         A parameter is not one of its choices or out of range.
+    ImageReadError
+        ``photo`` cannot be read as an image.
     WriteError
         The folder or a file cannot be written (an ``OSError``).
 
@@ -143,8 +152,16 @@ def write_simulation(kind: str, out, *, n: int | None = None, seed: int = 0,
     except OSError as e:
         raise WriteError(f"{out}: cannot create the folder ({e.strerror or e})") from None
     source = "procedural" if procedural else "auto"
+    if photo is not None:
+        if procedural:
+            raise ParameterError("photo and procedural: give one of them (a photo of one's own "
+                                 "or the procedural seabed)")
+        # (read first: a photo that cannot be read says so before anything is written)
+        image = to_bgr8(read_image(photo))
+        image.setflags(write=False)
     truth: dict = {"kind": kind, "seed": seed, "water": water, "width": w, "height": h,
-                   "source": source, "convention": _CONVENTION}
+                   "source": source if photo is None else str(Path(photo)),
+                   "convention": _CONVENTION}
     count = n if n is not None else (10 if kind == "sequence" else 1)
     bar = None
     if progress and count > 1:
@@ -155,7 +172,8 @@ def write_simulation(kind: str, out, *, n: int | None = None, seed: int = 0,
                    disable=None, leave=False, dynamic_ncols=True)
     try:
         _simulate_into(kind, out, truth, count, bar, seed=seed,
-                       water=None if water == "none" else water, source=source,
+                       water=None if water == "none" else water,
+                       source=source if photo is None else image,
                        marker_name=marker_name, size=(w, h), path=path)
     finally:
         if bar is not None:
