@@ -543,3 +543,22 @@ def test_a_new_survey_keeps_other_files_in_a_parts_folder(scenes, cluster, tmp_p
                       scheduler=cluster.scheduler_address, progress=False)
     _check_once(r, 1)
     assert (out / "parts" / "notes.txt").read_text() == "mine"
+
+
+def test_a_workers_first_image_is_timed_without_the_warm_up(scenes, monkeypatch):
+    # a process's first search loads the compiled kernels (~300 ms): searched
+    # once untimed before, so that the first image's ms is its own
+    det = seahough.Detector(seahough.Pattern.from_image(cv2.imread(str(scenes / "pattern.png"))))
+    calls = []
+    real = seahough.Detector.search
+    monkeypatch.setattr(seahough.Detector, "search",
+                        lambda self, img, **kw: calls.append(img.shape) or real(self, img, **kw))
+    paths = [(i, str(scenes / "imgs" / f"s{i}.png")) for i in range(3)]
+    rows, _ = SD.search_batch(paths, det)
+    assert len(calls) == 4 and [r[2] for r in rows] == ["found"] * 3
+    rows, _ = SD.search_batch(paths[:2], det)            # the same worker's next batch
+    assert len(calls) == 6
+    # an unreadable first image: its row says so as before
+    rows, _ = SD.search_batch([(9, str(scenes / "imgs" / "z_bad.png"))],
+                              seahough.Detector(seahough.Pattern.rectangle(40, 30)))
+    assert rows[0][2] == "error" and "z_bad.png" not in rows[0][8] and rows[0][8]

@@ -23,6 +23,7 @@ import math
 import os
 import sys
 import time
+import weakref
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -164,6 +165,26 @@ def _hold(detector: Detector) -> Detector:
     return detector
 
 
+#: The Detectors this process has searched with: its first search loads the
+#: compiled kernels (about 300 ms), which is no image's time.
+_WARM: "weakref.WeakSet[Detector]" = weakref.WeakSet()
+
+
+def _warm_up(detector: Detector, path: str) -> None:
+    """Search the image at ``path`` once, untimed and its answer dropped, so
+    that the first image's ``ms`` is its own (whatever goes wrong is said by
+    the timed search after)."""
+    from ..io.images import read_image
+
+    cfg = detector.config
+    try:
+        detector.search(read_image(path, max_pixels=cfg.max_pixels,
+                                   max_memory_mb=cfg.max_memory_mb))
+    except Exception:  # noqa: BLE001 - (the timed search says it)
+        pass
+    _WARM.add(detector)
+
+
 def search_batch(batch: list, detector: Detector) -> tuple[list, list]:
     """Search the images of ``batch`` (``(index, path)`` pairs), on a worker.
 
@@ -175,6 +196,8 @@ def search_batch(batch: list, detector: Detector) -> tuple[list, list]:
 
     cfg = detector.config
     rows, dets = [], []
+    if batch and detector not in _WARM:
+        _warm_up(detector, batch[0][1])
     for index, path in batch:
         t0 = time.perf_counter()
         try:
