@@ -326,12 +326,15 @@ def test_a_folder_says_what_it_does_not_read(tmp_path, caplog):
         cv2.imwrite(str(tmp_path / name / "g.png"), np.zeros((16, 16), np.uint8))
     for name in ("clip.mp4", "a.gif", "b.GIF", "nav.csv", ".hidden.gif"):
         (tmp_path / name).write_bytes(b"x")
+    # a .ts file is a video when it is an MPEG transport stream, not TypeScript
+    (tmp_path / "cam.ts").write_bytes(b"\x47\x40\x00\x10" + bytes(184))
+    (tmp_path / "logger.ts").write_text("export const x = 1;\n")
     with caplog.at_level("WARNING", logger="seahough.io"):
         assert [Path(p).name for p in list_frames(tmp_path)] == ["f1.png", "f2.png"]
     (msg,) = [r.getMessage() for r in caplog.records]
     assert msg.startswith(f"note: {tmp_path}: not read: 2 subfolders of images, e.g. dive2 "
                           "(a folder is not searched inside)"), msg
-    assert "1 video file (.mp4)" in msg, msg
+    assert "2 video files (.mp4, .ts)" in msg, msg
     assert "2 other picture files (.gif)" in msg and "nav.csv" not in msg, msg
     # a folder with only subfolders: the error says where the images may be
     top = tmp_path / "empty"

@@ -281,11 +281,22 @@ def _not_read(entries) -> str:
         kinds.append(f"{len(dirs)} subfolder{'s' * (len(dirs) > 1)} of images, e.g. "
                      f"{printable(dirs[0])} (a folder is not searched inside)")
     for what, exts in (("video", VIDEO_EXTENSIONS), ("other picture", OTHER_PICTURES)):
-        got = [ext for e, ext in entries if ext in exts and e.name not in named]
+        got = [ext for e, ext in entries if ext in exts and e.name not in named
+               and (ext != ".ts" or _transport_stream(e.path))]
         if got:
             kinds.append(f"{len(got)} {what} file{'s' * (len(got) > 1)} "
                          f"({', '.join(sorted(set(got)))})")
     return "; ".join(kinds)
+
+
+def _transport_stream(path: str) -> bool:
+    """Whether a ``.ts`` file is an MPEG transport stream (a video: its
+    packets start with the sync byte 0x47), not TypeScript source."""
+    try:
+        with open(path, "rb") as f:
+            return f.read(1) == b"\x47"
+    except OSError:
+        return False
 
 
 def _entry(path: str) -> os.stat_result:
