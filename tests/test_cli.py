@@ -302,6 +302,37 @@ def test_the_accumulator_picture_of_several_patterns_is_the_found_ones(tmp_path,
     assert seen["title"].endswith("of pattern rope") and len(seen["dets"]) == 1
 
 
+def test_each_of_several_patterns_takes_its_own_settings(tmp_path):
+    from seahough.cli._common import make_detector
+
+    det = make_detector("gate=polyline:6:0,100,0,0,210,0,210,100@angle=-15:15,polarity=either"
+                        "+buoy=circle:16@scale=0.3:3,n=2,max-nfa=0.1+path=rect:120,20",
+                        (0.5, 2.0), (0.0, 360.0), 5, 0.5, 0.0, None, None, False, None, None)
+    gate, buoy, path = (det.parts[k] for k in ("gate", "buoy", "path"))
+    assert gate.angle_range == (345.0, 375.0) and gate.scale_range == (0.5, 2.0)  # (-15 to 15)
+    assert gate.pattern.polarity == "either" and path.pattern.polarity == "bright"
+    assert buoy.scale_range == (0.3, 3.0) and buoy.max_results == 2 and buoy.max_nfa == 0.1
+    assert path.angle_range == (0.0, 360.0) and path.max_results == 5
+    # one pattern may carry them too
+    one = make_detector("circle:16@scale=0.3:3", (0.5, 2.0), (0.0, 360.0), 5, 0.5, 0.0, None,
+                        None, False, None, None)
+    assert one.scale_range == (0.3, 3.0) and not one.parts
+    # in the command: found with them; a wrong option is one line
+    img = np.full((240, 320), 90, np.uint8)
+    cv2.circle(img, (100, 120), 8, 220, -1)      # a small buoy: half the pattern's radius
+    cv2.imwrite(str(tmp_path / "pool.png"), img)
+    proc = run("detect", "box=rect:60,40+buoy=circle:16@scale=0.3:3", tmp_path / "pool.png",
+               "--json")
+    assert proc.returncode == 0, proc.stderr
+    (rec,) = [json.loads(line) for line in proc.stdout.splitlines()]
+    d = rec["detections"][0]
+    assert d["pattern"] == "buoy" and abs(d["scale"] - 0.5) < 0.05, d
+    for bad, needle in (("buoy=circle:16@scale=2", "scale='2': expected LO:HI"),
+                        ("buoy=circle:16@size=2:3", "with keys scale, angle"),
+                        ("buoy=circle:16@polarity=up", "bright, dark or either")):
+        assert_one_error_line(run("detect", bad, tmp_path / "pool.png"), needle)
+
+
 def test_detect_out_writes_pngs(scenes, tmp_path):
     d, _ = scenes
     from seahough.viz import detections_size
@@ -637,7 +668,7 @@ def test_simulate_from_a_photo_of_ones_own(tmp_path):
     proc = run(*args, "--out", tmp_path / "b", "-q")
     assert proc.returncode == 0 and proc.stderr == "", proc.stderr
     truth = json.loads((tmp_path / "b" / "truth.json").read_text())
-    assert truth["source"] == str(photo)
+    assert truth["source"] == str(photo.resolve())
     # the views are of that photo: the first frame is where the simulator puts it
     frames, _ = sim.sequence(cv2.imread(str(photo)), n_frames=60, frame_size=(120, 160),
                              path="turn", water="moderate", seed=0)
@@ -649,7 +680,14 @@ def test_simulate_from_a_photo_of_ones_own(tmp_path):
     assert_one_error_line(proc, "none.jpg: no such file")
     proc = run("simulate", "pair", "--out", tmp_path / "e", "--photo", photo, "--procedural")
     assert_one_error_line(proc, "photo and procedural")
-    assert not (tmp_path / "d" / "truth.json").exists() and not (tmp_path / "e" / "truth.json").exists()
+    assert not (tmp_path / "d").exists() and not (tmp_path / "e").exists()
+    # a 12-bit camera's photo in a 16-bit file: stretched by its bits, not darkened by 257
+    cv2.imwrite(str(tmp_path / "floor12.png"),
+                (sim.seabed((240, 320), seed=3).astype(np.uint16) * 16))
+    proc = run("simulate", "negative", "--out", tmp_path / "f", "--photo",
+               tmp_path / "floor12.png", "--water", "none", "-q")
+    assert proc.returncode == 0, proc.stderr
+    assert cv2.imread(str(tmp_path / "f" / "negative_000.png")).mean() > 60
 
 
 @pytest.fixture(scope="module")

@@ -102,8 +102,8 @@ def test_a_declined_candidate_says_why():
     scene, truth = _scene(disc.image, _coverage(disc), 40, scale_range=(0.6, 1.4), hide=0.0)
     res = seahough.Detector(ring, scale_range=(0.5, 2.0)).search(scene)
     assert res.detections == []
-    why = [c.declined for c in res.candidates if c.full is not None
-           and math.hypot(c.full.pose.tx - truth.x, c.full.pose.ty - truth.y) < 3]
+    why = [c.declined for c in res.candidates
+           if math.hypot(c.pose.tx - truth.x, c.pose.ty - truth.y) < 3]
     assert why and why[0].startswith("its hole is not in the image"), why
     # every candidate not reported says why; a detection says nothing
     scene, truth = _scene(ring.image, _coverage(ring), 41, scale_range=(0.6, 1.4), hide=0.0)
@@ -112,7 +112,33 @@ def test_a_declined_candidate_says_why():
     reported = [c for c in res.candidates if not c.declined]
     assert len(reported) == 1 and len(res.candidates) > 1
     assert abs(reported[0].full.score - res.detections[0].score) < 1e-9
-    assert all(c.declined for c in res.candidates if c is not reported[0])
+
+
+def test_declined_reasons_of_two_alike_objects():
+    # two equal boxes, one result asked for: the second is over max_results,
+    # and the first's confidence (measured against the second) too low
+    rng = np.random.default_rng(3)
+    img = cv2.GaussianBlur(rng.normal(100, 12, (240, 320)).astype(np.float32), (0, 0), 1.5)
+    cv2.rectangle(img, (40, 60), (99, 99), 210, -1)
+    cv2.rectangle(img, (200, 140), (259, 179), 210, -1)
+    box = seahough.Pattern.rectangle(60, 40)
+    res = seahough.Detector(box, scale_range=(0.8, 1.25), angle_range=(0, 0), max_results=1,
+                            min_confidence=0.3).search(img)
+    assert res.detections == []
+    why = {"left" if c.pose.tx < 160 else "right": c.declined for c in res.candidates
+           if c.score > 0.9}
+    # (judged: the first; the one over max_results was not)
+    assert sorted(c.nfa < 1e-6 for c in res.candidates if c.score > 0.9) == [False, True]
+    assert set(why) == {"left", "right"}, why
+    first, second = sorted(why.values(), key=lambda w: not w.startswith("confidence"))
+    assert first.startswith("confidence ") and "under min_confidence 0.3 (a look-alike" in first
+    assert second == "max_results 1 reached by better candidates", second
+    assert all(c.declined for c in res.candidates)
+    # with two results asked for, both are reported and say nothing
+    res = seahough.Detector(box, scale_range=(0.8, 1.25), angle_range=(0, 0),
+                            max_results=2).search(img)
+    assert len(res.detections) == 2
+    assert sum(not c.declined for c in res.candidates) == 2
 
 
 @pytest.mark.parametrize("name", S.MARKERS)

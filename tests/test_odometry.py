@@ -329,6 +329,9 @@ def test_a_folder_says_what_it_does_not_read(tmp_path, caplog):
     # a .ts file is a video when it is an MPEG transport stream, not TypeScript
     (tmp_path / "cam.ts").write_bytes(b"\x47\x40\x00\x10" + bytes(184))
     (tmp_path / "logger.ts").write_text("export const x = 1;\n")
+    (tmp_path / "Greeter.ts").write_text("G" + "x" * 300)   # ("G" is 0x47: one byte is not enough)
+    if hasattr(os, "mkfifo"):
+        os.mkfifo(tmp_path / "live.ts")   # (a capture's named pipe: never opened, it would block)
     with caplog.at_level("WARNING", logger="seahough.io"):
         assert [Path(p).name for p in list_frames(tmp_path)] == ["f1.png", "f2.png"]
     (msg,) = [r.getMessage() for r in caplog.records]

@@ -558,7 +558,9 @@ def test_a_workers_first_image_is_timed_without_the_warm_up(scenes, monkeypatch)
     assert len(calls) == 4 and [r[2] for r in rows] == ["found"] * 3
     rows, _ = SD.search_batch(paths[:2], det)            # the same worker's next batch
     assert len(calls) == 6
-    # an unreadable first image: its row says so as before
-    rows, _ = SD.search_batch([(9, str(scenes / "imgs" / "z_bad.png"))],
-                              seahough.Detector(seahough.Pattern.rectangle(40, 30)))
+    # an unreadable first image: its row says so as before, and the next one warms up
+    other = seahough.Detector(seahough.Pattern.rectangle(40, 30))
+    calls.clear()
+    rows, _ = SD.search_batch([(9, str(scenes / "imgs" / "z_bad.png")), paths[0]], other)
     assert rows[0][2] == "error" and "z_bad.png" not in rows[0][8] and rows[0][8]
+    assert rows[1][2] in ("found", "not found") and len(calls) == 2 and other in SD._WARM

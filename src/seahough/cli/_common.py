@@ -205,7 +205,7 @@ _SHAPE_USAGE = {"rect": "rect:W,H (e.g. rect:60,40)", "rectangle": "rect:W,H (e.
                 "ring": "ring:R,INNER (e.g. ring:30,20)",
                 "polygon": "polygon:x1,y1,x2,y2,x3,y3,...",
                 "poly": "polygon:x1,y1,x2,y2,x3,y3,...",
-                "polyline": "polyline:WIDTH:x1,y1,x2,y2,... (e.g. polyline:6:0,80,0,0,60,0,60,80)",
+                "polyline": "polyline:WIDTH:x1,y1,x2,y2,... (e.g. polyline:6:0,100,0,0,210,0,210,100)",
                 "curve": "curve:WIDTH (e.g. curve:8; a bright rope, --polarity dark for a "
                          "dark cable)"}
 
@@ -266,15 +266,83 @@ def make_detector(pattern, scale_range, angle_range, max_results, min_score, min
                            config, max_results, max_nfa)
     named = parse_patterns(pattern)
     if named is None:
-        pat = parse_pattern(pattern, polarity, mask, config)
+        spec, own = pattern_options(pattern)
+        pat = parse_pattern(spec, own.pop("polarity", polarity), mask, config)
+        scale_range = own.pop("scale_range", scale_range)
+        angle_range = own.pop("angle_range", angle_range)
+        max_results = own.pop("max_results", max_results)
+        min_score = own.pop("min_score", min_score)
+        min_confidence = own.pop("min_confidence", min_confidence)
+        max_nfa = own.pop("max_nfa", max_nfa)
     else:
         if mask is not None:
             raise click.BadParameter("--mask applies to a single image pattern, not to several "
                                      "patterns", param_hint="--mask")
-        pat = {name: parse_pattern(spec, polarity, None, config) for name, spec in named}
+        pat = {}
+        for name, spec in named:
+            spec, own = pattern_options(spec)
+            p = parse_pattern(spec, own.pop("polarity", polarity), None, config)
+            if own:   # (its own ranges or thresholds: a Detector of its own)
+                kw = dict(scale_range=scale_range, angle_range=angle_range,
+                          max_results=max_results, min_score=min_score,
+                          min_confidence=min_confidence, max_nfa=max_nfa)
+                kw.update(own)
+                p = Detector(p, config=config, **kw)
+            pat[name] = p
     return Detector(pat, scale_range, angle_range, config=config,
                     max_results=max_results, min_score=min_score,
                     min_confidence=min_confidence, max_nfa=max_nfa)
+
+
+#: A pattern's own options in a PATTERN of several (``SPEC@key=value,...``).
+PATTERN_OPTIONS = {"scale": "scale_range", "angle": "angle_range", "polarity": "polarity",
+                   "n": "max_results", "min-score": "min_score",
+                   "min-confidence": "min_confidence", "max-nfa": "max_nfa"}
+
+
+def pattern_options(spec: str):
+    """A pattern's SPEC and its own options, from ``SPEC@key=value,...``
+    (``scale=LO:HI``, ``angle=LO:HI``, ``polarity=bright|dark|either``,
+    ``n=N``, ``min-score=S``, ``min-confidence=C``, ``max-nfa=E``), as
+    Detector keywords.
+
+    >>> pattern_options("polyline:6:0,100,0,0,210,0,210,100@angle=-15:15,polarity=either")
+    ('polyline:6:0,100,0,0,210,0,210,100', {'angle_range': (-15.0, 15.0), 'polarity': 'either'})
+    >>> pattern_options("circle:16")
+    ('circle:16', {})
+    """
+    if Path(spec).is_file() or "@" not in spec:
+        return spec, {}
+    spec, _, opts = spec.rpartition("@")
+    out = {}
+    for item in opts.split(","):
+        key, eq, value = (t.strip() for t in item.partition("="))
+        if key not in PATTERN_OPTIONS or not eq or not value:
+            raise click.BadParameter(
+                f"{spec}@{opts}: expected @key=value,... with keys "
+                + ", ".join(PATTERN_OPTIONS) + f" (got {item.strip()!r})", param_hint="PATTERN")
+        name = PATTERN_OPTIONS[key]
+        try:
+            if name in ("scale_range", "angle_range"):
+                lo, colon, hi = value.partition(":")
+                if not colon:
+                    raise ValueError
+                out[name] = (float(lo), float(hi))
+            elif name == "polarity":
+                if value not in ("bright", "dark", "either"):
+                    raise ValueError
+                out[name] = value
+            elif name == "max_results":
+                out[name] = int(value)
+            else:
+                out[name] = float(value)
+        except ValueError:
+            form = {"scale_range": "LO:HI", "angle_range": "LO:HI",
+                    "polarity": "bright, dark or either", "max_results": "a whole number"}
+            raise click.BadParameter(f"{spec}@{opts}: {key}={value!r}: expected "
+                                     f"{form.get(name, 'a number')}", param_hint="PATTERN") \
+                from None
+    return spec, out
 
 
 def _curve_width(spec: str, rest: str) -> float:
@@ -319,19 +387,28 @@ def parse_patterns(spec: str):
     True
     >>> parse_patterns("buoy=circle:16")
     [('buoy', 'circle:16')]
+    >>> parse_patterns("circle:16@scale=0.3:2+gate=rect:90,60@angle=-15:15")
+    [('circle:16', 'circle:16@scale=0.3:2'), ('gate', 'rect:90,60@angle=-15:15')]
     """
     if Path(spec).is_file():
         return None
+
+    def naming(part):   # NAME=REST, or "" and the part (an "=" after "@" is an option's)
+        name, eq, rest = part.partition("=")
+        if not eq or "@" in name or any(c in name for c in ":/\\.,"):
+            return "", part
+        return name, rest
+
     if "+" not in spec:   # one pattern: named only as NAME=SPEC with a plain name
-        name, eq, rest = spec.partition("=")
-        if not eq or not name.strip() or any(c in name for c in ":/\\.,"):
+        name, _ = naming(spec)
+        if not name.strip():
             return None
     named = []
     for part in spec.split("+"):
-        name, eq, rest = part.partition("=")
+        name, rest = naming(part)
         name, rest = name.strip(), rest.strip()
-        if not eq:
-            name, rest = part.strip(), part.strip()
+        if not name and rest:
+            name = rest.partition("@")[0].strip()
         if not name or not rest:
             raise click.BadParameter(f"{spec!r}: expected [NAME=]SPEC+[NAME=]SPEC..., got an "
                                      f"empty part {part!r}", param_hint="PATTERN")

@@ -285,12 +285,17 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
       circle:R           a disc;  circle:R,INNER (or ring:R,INNER)  a ring
       polygon:x1,y1,x2,y2,x3,y3,...
       polyline:WIDTH:x1,y1,x2,y2,...  open strips WIDTH wide along the
-                         points, e.g. a gate: polyline:6:0,80,0,0,60,0,60,80
+                         points, e.g. a gate: polyline:6:0,100,0,0,210,0,210,100
       curve:WIDTH        a rope or cable that bends, WIDTH px wide: each
                          found as the polyline of its centre line
     Several patterns at once: NAME=SPEC+NAME=SPEC... (e.g.
     "buoy=circle:16+post=line:120,12"); each detection names its pattern,
-    the strongest evidence (lowest nfa) first; -n is per pattern.
+    the strongest evidence (lowest nfa) first; -n is per pattern. A
+    pattern's own settings follow its SPEC after @ (the options' values
+    for the others): scale=LO:HI, angle=LO:HI, polarity=bright|dark|either,
+    n=N, min-score=S, min-confidence=C, max-nfa=E, e.g.
+    "gate=polyline:6:0,100,0,0,210,0,210,100@angle=-15:15,polarity=either
+    +buoy=circle:16@scale=0.3:3".
 
     \b
     Positions are pattern-origin pixels (x right, y down); angles degrees

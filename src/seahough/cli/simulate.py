@@ -4,12 +4,13 @@
 from __future__ import annotations
 
 import logging
+from pathlib import Path
 
 import click
 
 from ..sim import MARKERS
 from ..sim.files import KINDS, PATHS, WATERS, write_simulation
-from ._common import PROG, _out_dir
+from ._common import PROG
 
 
 @click.command(no_args_is_help=True)
@@ -53,7 +54,7 @@ def simulate(kind, out, count, seed, water, marker_name, size, path_kind, proced
     docs/odometry.md), so you can test your own settings. A progress bar
     is shown on stderr for several scenes when stderr is a terminal.
     """
-    o = _out_dir(out)
+    o = Path(out)   # (created by write_simulation once its settings are checked)
     # a scene that cannot be written raises a SeahoughError: main() prints its one line
     notes = logging.getLogger("seahough.sim")
     level = notes.level

@@ -14,7 +14,7 @@ each search, so one :class:`~seahough.Detector` can serve several threads.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
@@ -30,7 +30,16 @@ from .refine import Fit, Pose, refine
 
 @dataclass
 class Candidate:
-    """A refined pose at the working scale, and later at full resolution."""
+    """A refined pose at the working scale, and later at full resolution.
+
+    ``pose`` and ``score`` are the full-resolution finish's when the
+    candidate got one, else the working scale's (a :class:`~.refine.Pose`:
+    ``tx, ty`` the pattern origin's place in full-resolution image pixels,
+    ``scale``, ``angle`` in degrees). ``nfa``: its number of false alarms,
+    when it was judged (inf otherwise). ``declined``: why it was not
+    reported, with its figures ("" for a detection). ``pattern``: the name
+    of its pattern in a Detector of several.
+    """
 
     fit: Fit                  # working-scale pose and score
     votes: float              # height of its accumulator peak
@@ -40,6 +49,25 @@ class Candidate:
     #: why :func:`~.ranking.rank` did not report it, with its figures (e.g.
     #: "NFA 3.2 over max_nfa 1"); "" for a detection
     declined: str = ""
+    pattern: str = ""
+    #: the working-scale pose in full-resolution pixels (ranking)
+    placed: Pose | None = field(default=None, repr=False)
+
+    @property
+    def pose(self) -> Pose:
+        """Its pose in full-resolution image pixels (the finish's, or the
+        working scale's brought to full resolution)."""
+        if self.full is not None:
+            return self.full.pose
+        return self.placed if self.placed is not None else self.fit.pose
+
+    @property
+    def score(self) -> float:
+        return self.full.score if self.full is not None else self.work_score
+
+    @property
+    def nfa(self) -> float:
+        return self.evidence.nfa if self.evidence is not None else math.inf
 
 
 @dataclass(frozen=True)

@@ -59,9 +59,12 @@ class SearchResult:
     ``note`` says why a search stopped before voting (its detections are
     then empty): one of :data:`SEARCH_NOTES`. ``planes`` and ``features``
     may then be None. ``candidates`` are the refined candidate poses
-    (:class:`~.candidates.Candidate`), best first; one not reported says
-    why in its ``declined`` (e.g. a disc's pose for a ring: "its hole is not
-    in the image"). For a Detector of several
+    (:class:`~.candidates.Candidate`: ``pose``, ``score``, ``nfa``), best
+    first, at most ``Config.n_candidates`` (7) per pattern; one not reported
+    says why in its ``declined`` (e.g. "NFA 1.08 over max_nfa 1", or a
+    disc's pose for a ring: "its hole is not in the image"). An object in
+    view that is no candidate at all had too few votes: more candidates
+    (``Config(n_candidates=30)``) may bring it in. For a Detector of several
     patterns, ``parts`` holds each pattern's own result by name (``planes``
     and ``features`` are then those of the best detection's pattern, or of
     the first pattern when none is found; ``planes.pattern`` names it).
@@ -72,7 +75,7 @@ class SearchResult:
     features: Features | None
     factor: float
     candidates: list
-    timings: dict
+    timings: dict             # seconds, by stage
     note: str = ""
     parts: dict = field(default_factory=dict)
 
@@ -412,6 +415,8 @@ class Detector:
         for name, r in results.items():
             if r.planes is not None:
                 r.planes.pattern = name
+            for c in r.candidates:
+                c.pattern = name
         # the planes and features shown: the best detection's pattern's (else the first's)
         first = results[dets[0].pattern] if dets else next(iter(results.values()))
         notes = {r.note for r in results.values()}

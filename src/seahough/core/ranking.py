@@ -375,9 +375,13 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
     pre = max(0.85 * ctx.min_score, 0.6 * best)  # only those that could win
     todo = [c for c in cands if c.work_score >= pre][: ctx.max_results + 2]
     for c in cands:
-        if not any(c is t for t in todo):
-            c.declined = (f"working-scale score {c.work_score:.3g}: not among the "
-                          f"{ctx.max_results + 2} best over {pre:.3g}, not finished")
+        c.placed = _full_pose(c.fit.pose, ctx.features)
+        if c.work_score < pre:
+            c.declined = (f"score {c.work_score:.3g} (coarse, before the full-resolution "
+                          f"finish) under {pre:.3g}, the least that could win")
+        elif not any(c is t for t in todo):
+            c.declined = (f"score {c.work_score:.3g} (coarse): {ctx.max_results + 2} "
+                          "better ones were finished (max_results + 2)")
     turns = () if ctx.angle_known else ctx.pattern.near_turns(ctx.config)
     alts = [_alternatives(ctx, c, turns) for c in todo]
     wheres = (_full_edges(ctx, gray, todo, alts) if todo and ctx.factor < 0.999
@@ -390,18 +394,23 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
     todo.sort(key=lambda c: -(c.full.score + c.work_score))
     accepted: list[Candidate] = []
     other_object: list[Candidate] = []   # (a disc for a ring: no rival of the ring)
+    s0, s1 = ctx.scale_range
     for c in todo:
-        if len(accepted) >= ctx.max_results:
-            c.declined = f"max_results {ctx.max_results} already found"
-            continue
         if c.full.score < ctx.min_score:
             c.declined = f"score {c.full.score:.3g} under min_score {ctx.min_score:.3g}"
             continue
         if not cmp.pose_ok(c.full.pose):
-            c.declined = f"scale {c.full.pose.scale:.3g} outside the searched range"
+            q = c.full.pose
+            c.declined = (f"scale {q.scale:.3g} outside {0.8 * s0:.3g}-{1.25 * s1:.3g} (the "
+                          "searched range and its slack)" if math.isfinite(q.scale)
+                          and math.isfinite(q.tx) and math.isfinite(q.ty)
+                          else "its refinement diverged (no finite pose)")
             continue
         if any(cmp.same(c.full.pose, a.full.pose, 1.0) for a in accepted):
-            c.declined = "the same object as a better detection"
+            c.declined = "the same object as a better candidate"
+            continue
+        if len(accepted) >= ctx.max_results:
+            c.declined = f"max_results {ctx.max_results} reached by better candidates"
             continue
         judge(ctx, c)  # (only those that could be accepted: it costs a little)
         if c.evidence.nfa > ctx.max_nfa:
@@ -426,7 +435,9 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
     for c in accepted:
         conf = confidence(c.work_score, runner_up)
         if conf < min_confidence:
-            c.declined = f"confidence {conf:.3g} under min_confidence {min_confidence:.3g}"
+            c.declined = (f"confidence {conf:.3g} under min_confidence {min_confidence:.3g} "
+                          f"(a look-alike scores {runner_up:.3g} to its {c.work_score:.3g}, "
+                          "coarse)")
             continue
         dets.append(to_detection(ctx, c, conf, gray.shape))
     dets.sort(key=lambda d: -d.score)

@@ -282,21 +282,27 @@ def _not_read(entries) -> str:
                      f"{printable(dirs[0])} (a folder is not searched inside)")
     for what, exts in (("video", VIDEO_EXTENSIONS), ("other picture", OTHER_PICTURES)):
         got = [ext for e, ext in entries if ext in exts and e.name not in named
-               and (ext != ".ts" or _transport_stream(e.path))]
+               and (ext != ".ts" or _transport_stream(e))]
         if got:
             kinds.append(f"{len(got)} {what} file{'s' * (len(got) > 1)} "
                          f"({', '.join(sorted(set(got)))})")
     return "; ".join(kinds)
 
 
-def _transport_stream(path: str) -> bool:
+def _transport_stream(entry: os.DirEntry) -> bool:
     """Whether a ``.ts`` file is an MPEG transport stream (a video: its
-    packets start with the sync byte 0x47), not TypeScript source."""
+    188-byte packets start with the sync byte 0x47, "G"), not TypeScript
+    source. Only a regular file is opened (a named pipe would block)."""
     try:
-        with open(path, "rb") as f:
-            return f.read(1) == b"\x47"
+        if not entry.is_file():
+            return False
+        if not stat.S_ISREG(os.stat(entry.path).st_mode):
+            return False
+        with open(entry.path, "rb") as f:
+            head = f.read(189)
     except OSError:
         return False
+    return head[:1] == b"\x47" and (len(head) < 189 or head[188:189] == b"\x47")
 
 
 def _entry(path: str) -> os.stat_result:

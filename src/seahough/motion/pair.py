@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..config import MOTION_CONFIG, Config
-from ..core.detector import Detector
+from ..core.detector import SEARCH_NOTES, Detector
 from ..core.features import Features, extract_features
 from ..core.pattern import Pattern
 from ..core.preprocess import choose_factor
@@ -179,9 +179,10 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
     Returns
     -------
     Motion or None
-        None: the motion cannot be told; why (nothing found, or which of
-        ``min_confidence``, ``min_score``, ``max_nfa`` the best motion
-        missed, with its figures) is logged at INFO level on the
+        None: the motion cannot be told; why (the current frame has no
+        edges, nothing found, or which of ``min_confidence``,
+        ``min_score``, ``max_nfa`` the best motion missed, with its
+        figures) is logged at INFO level on the
         ``"seahough.motion"`` logger (``logging.basicConfig(level=logging.INFO)``
         prints it).
 
@@ -555,6 +556,10 @@ def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
                   r.score, overlap(r.matrix, w, h), float(r.nfa), r.parallax, r.homography)
 
 
+#: The search's note for a frame without edges (:data:`~seahough.core.detector.SEARCH_NOTES`).
+NO_EDGES = SEARCH_NOTES[1]
+
+
 def declined(r: PairMeasure | None, min_confidence: float, min_score: float,
              max_nfa: float, stopped: str = "") -> str:
     """Why a pair's best measurement ``r`` is not reported ("" when it is);
@@ -569,7 +574,7 @@ def declined(r: PairMeasure | None, min_confidence: float, min_score: float,
     >>> declined(None, 0.15, 0.15, 1.0, "no edges")
     'the current frame has no edges to match (blank, dark, overexposed or out of focus?)'
     """
-    if r is None and stopped == "no edges":
+    if r is None and stopped == NO_EDGES:
         return "the current frame has no edges to match (blank, dark, overexposed or out of focus?)"
     if r is None:
         why = f" (the search stopped: {stopped})" if stopped else ""

@@ -84,8 +84,8 @@ def _place_views(rng: np.random.Generator, image, source, views: list[tuple[np.n
     if u > MAGNIFY_NOTE:
         log.warning("note: the photo (%dx%d) is magnified %.1fx to hold every view (they "
                     "span %dx%d view pixels): the views are blurred by as much; give a larger "
-                    "photo (`seahough simulate --photo`; or fewer, smaller or nearer views), or a "
-                    "procedural seabed", pw, ph, u,
+                    "photo (`seahough simulate --photo`, or the image or source argument), "
+                    "fewer, smaller or nearer views, or a procedural seabed", pw, ph, u,
                     math.ceil(bw), math.ceil(bh))
     # virtual = u * photo - t: the box [lo, hi] must lie in [-t, u * (size - 1) - t]
     tx_lo, tx_hi = -lo[0], u * (pw - 1) - hi[0]

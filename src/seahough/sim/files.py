@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -106,7 +107,8 @@ def write_simulation(kind: str, out, *, n: int | None = None, seed: int = 0,
     Returns
     -------
     dict
-        The truth, as written to ``out/truth.json``: the settings, and
+        The truth, as written to ``out/truth.json``: the settings (``source``:
+        "auto", "procedural", or the photo's absolute path), and
         ``scenes`` (one entry per scene or pair: its file names, seed and
         the :class:`~seahough.sim.Truth` fields that apply) or, for a
         sequence, ``frames`` (per frame: ``matrix_from_first``,
@@ -116,8 +118,8 @@ def write_simulation(kind: str, out, *, n: int | None = None, seed: int = 0,
     ------
     ParameterError
         A parameter is not one of its choices or out of range.
-    ImageReadError
-        ``photo`` cannot be read as an image.
+    ImageReadError, ImageSizeError
+        ``photo`` cannot be read as an image, or is too large to be read.
     WriteError
         The folder or a file cannot be written (an ``OSError``).
 
@@ -146,21 +148,20 @@ def write_simulation(kind: str, out, *, n: int | None = None, seed: int = 0,
     if len(size) != 2:
         raise ParameterError(f"size={size!r}: expected (width, height)")
     w, h = (int(number(f"size[{i}]", v, lo=1, integer=True)) for i, v in enumerate(size))
-    out = Path(out)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise WriteError(f"{out}: cannot create the folder ({e.strerror or e})") from None
     source = "procedural" if procedural else "auto"
     if photo is not None:
         if procedural:
             raise ParameterError("photo and procedural: give one of them (a photo of one's own "
                                  "or the procedural seabed)")
         # (read first: a photo that cannot be read says so before anything is written)
-        image = to_bgr8(read_image(photo))
-        image.setflags(write=False)
+        image = _photo(photo)
+    out = Path(out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise WriteError(f"{out}: cannot create the folder ({e.strerror or e})") from None
     truth: dict = {"kind": kind, "seed": seed, "water": water, "width": w, "height": h,
-                   "source": source if photo is None else str(Path(photo)),
+                   "source": source if photo is None else os.path.abspath(photo),
                    "convention": _CONVENTION}
     count = n if n is not None else (10 if kind == "sequence" else 1)
     bar = None
@@ -184,6 +185,19 @@ def write_simulation(kind: str, out, *, n: int | None = None, seed: int = 0,
     except OSError as e:
         raise WriteError(f"{target}: {e.strerror or e}") from None
     return truth
+
+
+def _photo(path) -> np.ndarray:
+    """A user's seabed photo as 8-bit BGR (read-only). A 16-bit one holding
+    fewer bits (a 10- or 12-bit camera's samples) is stretched by the bits
+    its brightest level needs, not darkened by 257."""
+    img = read_image(path)
+    depth = None
+    if img.dtype == np.uint16:
+        depth = min(16, max(8, int(img.max()).bit_length()))
+    out = to_bgr8(img, depth)
+    out.setflags(write=False)
+    return out
 
 
 def _simulate_into(kind, out: Path, truth: dict, count: int, bar, *, seed, water, source,

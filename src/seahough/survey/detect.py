@@ -172,8 +172,10 @@ _WARM: "weakref.WeakSet[Detector]" = weakref.WeakSet()
 
 def _warm_up(detector: Detector, path: str) -> None:
     """Search the image at ``path`` once, untimed and its answer dropped, so
-    that the first image's ``ms`` is its own (whatever goes wrong is said by
-    the timed search after)."""
+    that the first image's ``ms`` is its own. An image that cannot be read
+    or searched warms nothing: the next one is tried (the timed search
+    after says what went wrong). The cost: one more search of one image per
+    worker process and Detector (a worker receives the Detector once)."""
     from ..io.images import read_image
 
     cfg = detector.config
@@ -181,7 +183,7 @@ def _warm_up(detector: Detector, path: str) -> None:
         detector.search(read_image(path, max_pixels=cfg.max_pixels,
                                    max_memory_mb=cfg.max_memory_mb))
     except Exception:  # noqa: BLE001 - (the timed search says it)
-        pass
+        return
     _WARM.add(detector)
 
 
@@ -196,9 +198,9 @@ def search_batch(batch: list, detector: Detector) -> tuple[list, list]:
 
     cfg = detector.config
     rows, dets = [], []
-    if batch and detector not in _WARM:
-        _warm_up(detector, batch[0][1])
     for index, path in batch:
+        if detector not in _WARM:
+            _warm_up(detector, path)
         t0 = time.perf_counter()
         try:
             img = read_image(path, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
