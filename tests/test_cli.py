@@ -5,6 +5,7 @@ tests), in a subprocess."""
 from __future__ import annotations
 
 import csv
+import io
 import json
 import os
 import subprocess
@@ -132,6 +133,34 @@ def scenes(tmp_path_factory):
 
 
 # ----------------------------------------------------------------------------- detect
+def test_detect_csv_holds_what_json_holds(scenes, tmp_path):
+    d, truth = scenes
+    args = ("detect", d / "pattern.png", d / "scene.png", d / "neg.png", "-n", 2, "--quiet")
+    proc = run(*args, "--csv")
+    assert proc.returncode == 1, proc.stderr
+    rows = list(csv.DictReader(io.StringIO(proc.stdout)))
+    recs = [json.loads(line) for line in run(*args, "--json").stdout.splitlines()]
+    found = [r for r in rows if r["file"].endswith("scene.png")]
+    assert [r["rank"] for r in found] == [str(i + 1) for i in range(len(recs[0]["detections"]))]
+    for r, det in zip(found, recs[0]["detections"]):
+        assert r["found"] == "True" and r["width"] == "640" and r["kind"] == "object"
+        for k in ("x", "y", "scale", "angle", "score", "confidence", "nfa"):
+            assert float(r[k]) == pytest.approx(det[k]), k
+        assert json.loads(r["flags"]) == det["flags"] and json.loads(r["matrix"]) == det["matrix"]
+    assert abs(float(found[0]["x"]) - truth.x) < 2
+    (neg,) = [r for r in rows if r["file"].endswith("neg.png")]   # one row, nothing found
+    assert neg["found"] == "False" and neg["rank"] == "" and neg["x"] == ""
+    assert_one_error_line(run(*args, "--csv", "--json"), "--json and --csv")
+    # a rope: its line columns; a bad file: its line on stderr, the others' rows kept
+    img, _ = sim.rope_scene(width=8, water="moderate", seed=5, source="procedural")
+    cv2.imwrite(str(tmp_path / "rope.png"), img)
+    proc = run("detect", "line:200,8", tmp_path / "rope.png", d / "notes.png", "--csv", "-n", 1,
+               "--angle-range", 0, 180, "-q")
+    assert proc.returncode == 2 and "notes.png" in proc.stderr
+    (r,) = list(csv.DictReader(io.StringIO(proc.stdout)))
+    assert r["kind"] == "line" and r["line_angle"] and r["line_offset"]
+
+
 def test_detect_json_matches_python_api(scenes):
     d, truth = scenes
     proc = run("detect", d / "pattern.png", d / "scene.png", "--json",

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import csv
 import inspect
+import io
+import json
 import math
 import time
 from collections import deque
@@ -261,6 +264,9 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, max_width=No
               help="Image pattern only: mask of the object's pixels (non-zero).")
 @click.option("--json", "as_json", is_flag=True,
               help="One JSON object per image and line (JSON Lines) instead of tables.")
+@click.option("--csv", "as_csv", is_flag=True,
+              help="CSV instead of tables: a header, then a row per detection (an image with "
+              "none: one row, found false); lists (flags, matrix, points) as JSON text.")
 @click.option("--out", "-o", type=click.Path(file_okay=False), default=None,
               help="Write pictures per image here: <stem>_overlay.png (detections), "
               "<stem>_accumulator.png (the vote planes) and <stem>_edges.png (gradients, key "
@@ -273,8 +279,8 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, max_width=No
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar or notes; results only.")
 @workers_option("Images searched at once, in threads; results are printed in the order given")
 def detect(pattern, images, scale_range, angle_range, max_results, min_score, min_confidence,
-           max_nfa, downscale, keypoints, equalize, bit_depth, colour, polarity, mask, as_json, out,
-           max_width, quiet, workers):
+           max_nfa, downscale, keypoints, equalize, bit_depth, colour, polarity, mask, as_json,
+           as_csv, out, max_width, quiet, workers):
     """Find PATTERN in each IMAGE.
 
     \b
@@ -329,6 +335,8 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
                              max_nfa=max_nfa, colour=colour, bit_depth=bit_depth)
     if max_width is not None and out is None:
         raise click.UsageError("--max-width sizes the pictures of --out: give --out DIR")
+    if as_json and as_csv:
+        raise click.UsageError("--json and --csv: give one of them")
     pat = None if detector.parts else detector.pattern   # (the inset: one pattern only)
     out_dir = _out_dir(out) if out is not None else None
     workers = min(workers or default_workers(), len(images))
@@ -337,7 +345,8 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     stems: dict[str, int] = {}
     jobs = [(name, _picture_stem(name, out_dir, stems)) for name in images]
     with closing(_run_jobs(jobs, detector, pat, out_dir, workers, max_width)) as outcomes:
-        n_bad, n_missing = _report(outcomes, bar, say, as_json, quiet)
+        n_bad, n_missing = _report(outcomes, bar, say, "json" if as_json else
+                                   "csv" if as_csv else "table", quiet)
     if bar is not None:
         bar.close()
     if n_bad:
@@ -345,10 +354,44 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     return 1 if n_missing else 0
 
 
-def _report(outcomes, bar, say, as_json: bool, quiet: bool) -> tuple[int, int]:
-    """Print each image's outcome as it comes, in the order of the images;
-    returns how many files were bad and how many images had no detection."""
+#: The columns of ``detect --csv``: the image's, then a detection's (a
+#: shape's, a line's or a curve's: those that do not apply are empty).
+CSV_COLUMNS = ("file", "width", "height", "found", "note", "time_ms", "rank", "pattern", "kind",
+               "x", "y", "scale", "angle", "score", "confidence", "nfa", "flags", "line_angle",
+               "line_offset", "width_px", "length", "votes", "matrix", "points")
+
+
+def _csv_line(values) -> str:
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator="").writerow(values)
+    return buf.getvalue()
+
+
+def _csv_rows(name, w, h, note, ms, dets):
+    """The CSV lines of one image (:data:`CSV_COLUMNS`)."""
+    head = [name, int(w), int(h), bool(dets), note, round(ms, 3)]
+    if not dets:
+        return [_csv_line(head + [""] * (len(CSV_COLUMNS) - len(head)))]
+    out = []
+    for rank, d in enumerate(dets, 1):
+        rec = d.to_dict()
+        rec["width_px"] = rec.pop("width", None)   # (a curve's width, not the image's)
+        row = head + [rank]
+        for col in CSV_COLUMNS[7:]:
+            v = rec.get(col)
+            row.append("" if v is None else json.dumps(v, separators=(",", ":"))
+                       if isinstance(v, (list, tuple, dict)) else v)
+        out.append(_csv_line(row))
+    return out
+
+
+def _report(outcomes, bar, say, form: str, quiet: bool) -> tuple[int, int]:
+    """Print each image's outcome as it comes, in the order of the images
+    (``form``: "table", "json" or "csv"); returns how many files were bad
+    and how many images had no detection."""
     n_bad = n_missing = 0
+    if form == "csv":
+        say(_csv_line(CSV_COLUMNS))
     for name, done in outcomes:
         if bar is not None:
             bar.update(1)
@@ -362,7 +405,14 @@ def _report(outcomes, bar, say, as_json: bool, quiet: bool) -> tuple[int, int]:
         why = f" ({res.note})" if res.note else ""
         if not dets:
             n_missing += 1
-        if as_json:
+        if form == "csv":
+            for line in _csv_rows(name, w, h, res.note, ms, dets):
+                say(line)
+            if failed is not None:
+                say.error(printable(str(failed)))
+                n_bad += 1
+            continue
+        if form == "json":
             rec = {"file": name, "width": int(w), "height": int(h), "found": bool(dets),
                    "note": res.note, "detections": [d.to_dict() for d in dets],
                    "time_ms": round(ms, 3)}
