@@ -325,7 +325,7 @@ def test_the_accumulator_picture_of_several_patterns_is_the_found_ones(tmp_path,
     monkeypatch.setattr(viz, "plot_accumulator",
                         lambda planes, dets, path, title, note: seen.update(
                             planes=planes, dets=dets, title=title))
-    D._pictures("rope.png", img, res, det, None, tmp_path / "rope", None, {})
+    D._pictures("rope.png", img, res, det, None, tmp_path / "rope", D.Drawing(), {})
     # (SearchResult.planes too: the best detection's pattern's)
     assert seen["planes"] is res.parts["rope"].planes and seen["planes"] is res.planes
     assert seen["title"].endswith("of pattern rope") and len(seen["dets"]) == 1
@@ -360,6 +360,26 @@ def test_each_of_several_patterns_takes_its_own_settings(tmp_path):
                         ("buoy=circle:16@size=2:3", "with keys scale, angle"),
                         ("buoy=circle:16@polarity=up", "bright, dark or either")):
         assert_one_error_line(run("detect", bad, tmp_path / "pool.png"), needle)
+
+
+def test_detect_pictures_chooses_which_are_drawn(scenes, tmp_path):
+    d, _ = scenes
+    proc = run("detect", d / "pattern.png", d / "scene.png", "--out", tmp_path / "a",
+               "--pictures", "overlay", "--json", "-q")
+    assert proc.returncode == 0, proc.stderr
+    rec = json.loads(proc.stdout)
+    assert rec["overlay"] == str(tmp_path / "a" / "scene_overlay.png")
+    assert "accumulator" not in rec and "edges" not in rec
+    assert [p.name for p in (tmp_path / "a").iterdir()] == ["scene_overlay.png"]
+    proc = run("detect", d / "pattern.png", d / "scene.png", "--out", tmp_path / "b",
+               "--pictures", "edges,accumulator", "-q")
+    assert proc.returncode == 0, proc.stderr
+    assert sorted(p.name for p in (tmp_path / "b").iterdir()) == [
+        "scene_accumulator.png", "scene_edges.png"]
+    assert_one_error_line(run("detect", d / "pattern.png", d / "scene.png", "--out",
+                              tmp_path / "c", "--pictures", "overlay,vote"), "--pictures")
+    proc = run("detect", d / "pattern.png", d / "scene.png", "--pictures", "overlay")
+    assert proc.returncode == 2 and "give --out DIR" in proc.stderr
 
 
 def test_detect_out_writes_pngs(scenes, tmp_path):

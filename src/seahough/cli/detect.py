@@ -12,6 +12,7 @@ from collections import deque
 from contextlib import closing
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+from typing import NamedTuple
 
 import click
 
@@ -121,7 +122,7 @@ def _max_width_callback(ctx, param, value):
 
 
 def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir,
-                max_width=None):
+                draw=None):
     """Read and search one image, and write its pictures (``stem`` given):
     ``(result, (h, w), ms, written, failed)``, or the SeahoughError that
     stopped reading or searching it. ``failed``: the WriteError of a picture
@@ -142,17 +143,48 @@ def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir,
     failed = None
     if stem is not None:
         try:
-            _pictures(name, img, res, detector, pat, out_dir / stem, max_width, written)
+            _pictures(name, img, res, detector, pat, out_dir / stem, draw or Drawing(),
+                      written)
         except SeahoughError as e:
             failed = e
     return res, img.shape[:2], ms, written, failed
 
 
-def _pictures(name: str, img, res, detector: Detector, pat, base: Path, max_width,
+#: The pictures ``detect --out`` can draw for an image.
+PICTURES = ("overlay", "accumulator", "edges")
+
+
+class Drawing(NamedTuple):
+    """How ``detect --out`` draws: ``--max-width`` and ``--pictures``."""
+
+    max_width: int | None = None
+    kinds: tuple = PICTURES
+
+
+def _pictures_callback(ctx, param, value):
+    """``--pictures``: a comma list of :data:`PICTURES` (all when not given).
+
+    >>> _pictures_callback(None, None, "overlay, edges")
+    ('overlay', 'edges')
+    """
+    if value is None:
+        return PICTURES
+    kinds = tuple(k.strip().lower() for k in value.split(",") if k.strip())
+    bad = [k for k in kinds if k not in PICTURES]
+    if bad or not kinds:
+        raise click.BadParameter(f"{value!r}: expected a comma list of "
+                                 + ", ".join(PICTURES))
+    return tuple(dict.fromkeys(kinds))
+
+
+def _pictures(name: str, img, res, detector: Detector, pat, base: Path, draw: Drawing,
               written: dict) -> None:
-    """Draw one image's pictures at ``base``_overlay.png (and _accumulator.png,
-    _edges.png but for curves), adding each file written to ``written``."""
+    """Draw one image's pictures (``draw.kinds``) at ``base``_overlay.png,
+    _accumulator.png and _edges.png (curves: the overlay only), adding each
+    file written to ``written``."""
     from .. import viz as plot
+
+    max_width, kinds = draw
 
     dets = res.detections
     n = len(dets)
@@ -163,13 +195,15 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, max_widt
     if isinstance(detector, CurveSearch):    # curves: the overlay only
         head = f"{Path(name).name}: " + (f"{n} curve{'s' if n > 1 else ''}" if n
                                          else "no curve found")
-        plot.plot_curves(img, dets, ov, title=head, max_width=max_width,
-                         bit_depth=detector.config.bit_depth)
-        written["overlay"] = str(ov)
+        if "overlay" in kinds:
+            plot.plot_curves(img, dets, ov, title=head, max_width=max_width,
+                             bit_depth=detector.config.bit_depth)
+            written["overlay"] = str(ov)
         return
-    plot.plot_detections(img, dets, ov, pattern=pat, title=head, max_width=max_width,
-                         bit_depth=detector.config.bit_depth)
-    written["overlay"] = str(ov)
+    if "overlay" in kinds:
+        plot.plot_detections(img, dets, ov, pattern=pat, title=head, max_width=max_width,
+                             bit_depth=detector.config.bit_depth)
+        written["overlay"] = str(ov)
     planes, feats = res.planes, res.features
     acc_dets, acc_title = dets, f"{Path(name).name}: accumulator"
     if detector.parts:   # one pattern's planes and edges: the best detection's (else the first's)
@@ -179,22 +213,24 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, max_widt
             planes, feats = part.planes, part.features
         acc_dets = [d for d in dets if d.pattern == which]
         acc_title += f" of pattern {which}"
-    ac = Path(f"{base}_accumulator.png")
-    plot.plot_accumulator(planes, acc_dets, ac, title=acc_title, note=res.note)
-    written["accumulator"] = str(ac)
-    ed = Path(f"{base}_edges.png")
-    plot.plot_edges(img, feats, ed, title=f"{Path(name).name}: what the detector sees")
-    written["edges"] = str(ed)
+    if "accumulator" in kinds:
+        ac = Path(f"{base}_accumulator.png")
+        plot.plot_accumulator(planes, acc_dets, ac, title=acc_title, note=res.note)
+        written["accumulator"] = str(ac)
+    if "edges" in kinds:
+        ed = Path(f"{base}_edges.png")
+        plot.plot_edges(img, feats, ed, title=f"{Path(name).name}: what the detector sees")
+        written["edges"] = str(ed)
 
 
-def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, max_width=None):
+def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, draw=None):
     """``(name, outcome of _search_one)`` for each ``(name, stem)`` of
     ``jobs``, in their order: one at a time with one worker, else ``workers``
     threads with at most twice as many images in flight (read, searched or
     done but not yet printed), so that memory stays bounded."""
     if workers <= 1:
         for name, stem in jobs:
-            yield name, _search_one(name, stem, detector, pat, out_dir, max_width)
+            yield name, _search_one(name, stem, detector, pat, out_dir, draw)
         return
     pool = ThreadPoolExecutor(workers, thread_name_prefix="seahough-detect")
     pending: deque = deque()
@@ -202,7 +238,7 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, max_width=No
     try:
         for name, stem in todo:
             pending.append((name, pool.submit(_search_one, name, stem, detector, pat, out_dir,
-                                              max_width)))
+                                              draw)))
             if len(pending) >= 2 * workers:
                 break
         while pending:
@@ -211,7 +247,7 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, max_width=No
             nxt = next(todo, None)
             if nxt is not None:
                 pending.append((nxt[0], pool.submit(_search_one, *nxt, detector, pat, out_dir,
-                                                    max_width)))
+                                                    draw)))
             yield name, done
     finally:
         # (an error, Ctrl-C or a closed pipe: what has not started is dropped)
@@ -276,11 +312,15 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, max_width=No
               help="With --out: draw each photo at most PX px wide on its overlay (a wider "
               "one is shrunk to it); 0 or native: at its own width, pixel for pixel "
               "(default: 900 px on its longer side).")
+@click.option("--pictures", "pictures", type=str, default=None, metavar="KINDS",
+              callback=_pictures_callback,
+              help="With --out: which pictures, a comma list of overlay, accumulator, edges "
+              "(default: all three; the overlay alone takes less than half their time).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar or notes; results only.")
 @workers_option("Images searched at once, in threads; results are printed in the order given")
 def detect(pattern, images, scale_range, angle_range, max_results, min_score, min_confidence,
            max_nfa, downscale, keypoints, equalize, bit_depth, colour, polarity, mask, as_json,
-           as_csv, out, max_width, quiet, workers):
+           as_csv, out, max_width, pictures, quiet, workers):
     """Find PATTERN in each IMAGE.
 
     \b
@@ -335,6 +375,8 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
                              max_nfa=max_nfa, colour=colour, bit_depth=bit_depth)
     if max_width is not None and out is None:
         raise click.UsageError("--max-width sizes the pictures of --out: give --out DIR")
+    if pictures != PICTURES and out is None:
+        raise click.UsageError("--pictures chooses the pictures of --out: give --out DIR")
     if as_json and as_csv:
         raise click.UsageError("--json and --csv: give one of them")
     pat = None if detector.parts else detector.pattern   # (the inset: one pattern only)
@@ -344,7 +386,8 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     say = _Output(bar)
     stems: dict[str, int] = {}
     jobs = [(name, _picture_stem(name, out_dir, stems)) for name in images]
-    with closing(_run_jobs(jobs, detector, pat, out_dir, workers, max_width)) as outcomes:
+    with closing(_run_jobs(jobs, detector, pat, out_dir, workers,
+                           Drawing(max_width, pictures))) as outcomes:
         n_bad, n_missing = _report(outcomes, bar, say, "json" if as_json else
                                    "csv" if as_csv else "table", quiet)
     if bar is not None:
