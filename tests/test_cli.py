@@ -356,7 +356,8 @@ def test_each_of_several_patterns_takes_its_own_settings(tmp_path):
     (rec,) = [json.loads(line) for line in proc.stdout.splitlines()]
     d = rec["detections"][0]
     assert d["pattern"] == "buoy" and abs(d["scale"] - 0.5) < 0.05, d
-    for bad, needle in (("buoy=circle:16@scale=2", "scale='2': expected LO:HI"),
+    for bad, needle in (("buoy=circle16+box=rect:9,9", "a shape is NAME:SIZES: circle:R"),
+                        ("buoy=circle:16@scale=2", "scale='2': expected LO:HI"),
                         ("buoy=circle:16@size=2:3", "with keys scale, angle"),
                         ("buoy=circle:16@polarity=up", "bright, dark or either")):
         assert_one_error_line(run("detect", bad, tmp_path / "pool.png"), needle)

@@ -4,6 +4,7 @@ progress bars, range and number parsing, and pattern specs."""
 from __future__ import annotations
 
 import inspect
+import re
 
 import json
 import math
@@ -478,6 +479,10 @@ def parse_pattern(spec: str, polarity: str | None = None, mask: str | None = Non
                                      f"({SHAPES_HELP})", param_hint="PATTERN")
         hint = (f" (a shape needs its sizes: {_SHAPE_USAGE[spec.lower()]})"
                 if spec.lower() in _SHAPE_USAGE else "")
+        # a shape's name run into its sizes ("circle16"): its colon left out
+        shape = re.match(r"^([a-z]+)[\d.,]", spec.lower())
+        if not hint and shape and shape.group(1) in _SHAPE_USAGE:
+            hint = f" (a shape is NAME:SIZES: {_SHAPE_USAGE[shape.group(1)]})"
         raise _Fail(f"pattern {spec}: no such file{hint}")
     try:
         return Pattern.from_image(spec, mask=mask, polarity=_IMAGE_POLARITY[polarity or "same"],
