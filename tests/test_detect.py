@@ -362,3 +362,17 @@ def test_drawn_shapes_are_found_at_their_own_size():
     img = np.round(30 + 200 * cover).astype(np.uint8)
     d = seahough.Detector(seahough.Pattern.circle(16), (0.5, 2.0)).detect(img)[0]
     assert d.scale == pytest.approx(1.0, abs=0.01)
+
+
+def test_more_results_asked_than_candidates_are_found():
+    # 12 discs, 10 asked for: the search refined Config.n_candidates (7) and found 7
+    rng = np.random.default_rng(1)
+    img = cv2.GaussianBlur(rng.normal(100, 10, (480, 640)).astype(np.float32), (0, 0), 1.2)
+    for y in (100, 240, 380):
+        for x in (100, 240, 380, 520):
+            cv2.circle(img, (x, y), 20, 220, -1)
+    disc = seahough.Pattern.circle(20)
+    for n, want in ((5, 5), (10, 10), (15, 12)):
+        dets = seahough.Detector(disc, scale_range=(0.5, 2), max_results=n).detect(img)
+        assert len(dets) == want, (n, len(dets))
+        assert all(abs(d.scale - 1) < 0.05 for d in dets)

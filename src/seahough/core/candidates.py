@@ -246,6 +246,13 @@ class SearchContext:
     asked_angles: tuple | None = None
 
     @property
+    def n_candidates(self) -> int:
+        """How many candidates the search refines: ``Config.n_candidates``,
+        and at least ``max_results + 2`` (12 discs in view, 10 asked for:
+        7 refined gave 7)."""
+        return max(self.config.n_candidates, self.max_results + 2)
+
+    @property
     def scale_known(self) -> bool:
         return self.scale_range[0] == self.scale_range[1]
 
@@ -317,11 +324,11 @@ def _seed_cells(ctx: SearchContext, votes: Votes):
         radius = int(np.clip(round(0.25 * p.extent * s0 * ctx.factor / bins.step), 1,
                              tune.peak_radius))
     if p.is_line:   # (many maxima lie along one line: look further down the list)
-        ys, xs, vs = _one_peak_per_line(ctx, votes, *peaks(best_val, radius, 8 * cfg.n_candidates))
+        ys, xs, vs = _one_peak_per_line(ctx, votes, *peaks(best_val, radius, 8 * ctx.n_candidates))
     else:
-        ys, xs, vs = peaks(best_val, radius, cfg.n_candidates)
+        ys, xs, vs = peaks(best_val, radius, ctx.n_candidates)
     known = bins.scale_known and bins.angle_known
-    n_peaks = ctx.max_results + 1 if known else cfg.n_candidates + 4
+    n_peaks = ctx.max_results + 1 if known else ctx.n_candidates + 4
     cells = []
     ny, nx = best_val.shape
     for i, (yy, xx, v) in enumerate(list(zip(ys, xs, vs))[:n_peaks]):
@@ -409,7 +416,7 @@ def icp_subset(pf: PatternFeatures, k: int, frame: bool = False) -> np.ndarray:
 
 def find_candidates(ctx: SearchContext, votes: Votes) -> list:
     """Refine the accumulator's most promising cells into distinct candidate
-    poses at the working scale, best first (at most ``Config.n_candidates``)."""
+    poses at the working scale, best first (at most ``ctx.n_candidates``)."""
     cfg, p, bins, pf, feats = ctx.config, ctx.pattern, ctx.bins, ctx.pf, ctx.features
     tune = cfg.search
     cmp = ctx.compare
@@ -446,7 +453,7 @@ def find_candidates(ctx: SearchContext, votes: Votes) -> list:
     # the best so far after its first short ICP is scored there (tune.screen)
     screen = p.is_frame and not known
     for rank, sd in enumerate(todo):
-        if len(out) >= cfg.n_candidates:
+        if len(out) >= ctx.n_candidates:
             break
         ks, v, tx, ty, angle = sd.scale_bins, sd.votes, sd.tx, sd.ty, sd.angle
         lead = tune.screen * max((c.work_score for c in out), default=0.0)
