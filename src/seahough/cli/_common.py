@@ -394,22 +394,21 @@ def parse_patterns(spec: str):
     if Path(spec).is_file():
         return None
 
-    def naming(part):   # NAME=REST, or "" and the part (an "=" after "@" is an option's)
+    def naming(part):   # NAME=REST, or None and the part (an "=" after "@" is an option's)
         name, eq, rest = part.partition("=")
         if not eq or "@" in name or any(c in name for c in ":/\\.,"):
-            return "", part
+            return None, part
         return name, rest
 
     if "+" not in spec:   # one pattern: named only as NAME=SPEC with a plain name
         name, _ = naming(spec)
-        if not name.strip():
+        if name is None or not name.strip():
             return None
     named = []
     for part in spec.split("+"):
         name, rest = naming(part)
-        name, rest = name.strip(), rest.strip()
-        if not name and rest:
-            name = rest.partition("@")[0].strip()
+        rest = rest.strip()
+        name = rest.partition("@")[0].strip() if name is None else name.strip()
         if not name or not rest:
             raise click.BadParameter(f"{spec!r}: expected [NAME=]SPEC+[NAME=]SPEC..., got an "
                                      f"empty part {part!r}", param_hint="PATTERN")
