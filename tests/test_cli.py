@@ -143,13 +143,19 @@ def test_detect_csv_holds_what_json_holds(scenes, tmp_path):
     found = [r for r in rows if r["file"].endswith("scene.png")]
     assert [r["rank"] for r in found] == [str(i + 1) for i in range(len(recs[0]["detections"]))]
     for r, det in zip(found, recs[0]["detections"]):
-        assert r["found"] == "True" and r["width"] == "640" and r["kind"] == "object"
+        assert r["found"] == "true" and r["width"] == "640" and r["kind"] == "object"
         for k in ("x", "y", "scale", "angle", "score", "confidence", "nfa"):
             assert float(r[k]) == pytest.approx(det[k]), k
         assert json.loads(r["flags"]) == det["flags"] and json.loads(r["matrix"]) == det["matrix"]
     assert abs(float(found[0]["x"]) - truth.x) < 2
     (neg,) = [r for r in rows if r["file"].endswith("neg.png")]   # one row, nothing found
-    assert neg["found"] == "False" and neg["rank"] == "" and neg["x"] == ""
+    assert neg["found"] == "false" and neg["rank"] == "" and neg["x"] == ""
+    # a name with a line break, a comma and a quote stays one field
+    odd = tmp_path / 'new\nline, "q".png'
+    odd.write_bytes((d / "neg.png").read_bytes())
+    proc = run("detect", d / "pattern.png", odd, "--csv", "-q")
+    (r,) = list(csv.DictReader(io.StringIO(proc.stdout, newline="")))
+    assert r["file"] == str(odd) and r["found"] == "false"
     assert_one_error_line(run(*args, "--csv", "--json"), "--json and --csv")
     # a rope: its line columns; a bad file: its line on stderr, the others' rows kept
     img, _ = sim.rope_scene(width=8, water="moderate", seed=5, source="procedural")
@@ -356,7 +362,15 @@ def test_each_of_several_patterns_takes_its_own_settings(tmp_path):
     (rec,) = [json.loads(line) for line in proc.stdout.splitlines()]
     d = rec["detections"][0]
     assert d["pattern"] == "buoy" and abs(d["scale"] - 0.5) < 0.05, d
+    # a file name holding "@": the whole name names it
+    cv2.imwrite(str(tmp_path / "box@2x.png"), img[100:140, 80:120])
+    named = make_detector(f"{tmp_path / 'box@2x.png'}+circle:16", (0.5, 2.0), (0.0, 360.0), 5,
+                          0.5, 0.0, None, None, False, None, None)
+    assert list(named.parts) == [str(tmp_path / "box@2x.png"), "circle:16"]
     for bad, needle in (("buoy=circle16+box=rect:9,9", "a shape is NAME:SIZES: circle:R"),
+                        ("buoy=circle:16@n=2,n=3+box=rect:9,9", "n is given twice"),
+                        ("buoy=circle:16@scale=2:1+box=rect:9,9", "buoy: circle:16@...: scale"),
+                        ("curve:8@n=2", "takes no @ settings"),
                         ("buoy=circle:16@scale=2", "scale='2': expected LO:HI"),
                         ("buoy=circle:16@size=2:3", "with keys scale, angle"),
                         ("buoy=circle:16@polarity=up", "bright, dark or either")):

@@ -327,7 +327,7 @@ def test_a_folder_says_what_it_does_not_read(tmp_path, caplog):
     for name in ("clip.mp4", "a.gif", "b.GIF", "nav.csv", ".hidden.gif"):
         (tmp_path / name).write_bytes(b"x")
     # a .ts file is a video when it is an MPEG transport stream, not TypeScript
-    (tmp_path / "cam.ts").write_bytes(b"\x47\x40\x00\x10" + bytes(184))
+    (tmp_path / "cam.ts").write_bytes(2 * (b"\x47\x40\x00\x10" + bytes(184)))
     (tmp_path / "logger.ts").write_text("export const x = 1;\n")
     (tmp_path / "Greeter.ts").write_text("G" + "x" * 300)   # ("G" is 0x47: one byte is not enough)
     if hasattr(os, "mkfifo"):

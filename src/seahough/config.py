@@ -238,8 +238,8 @@ class Config:
         A pattern edge point counts as found when an image edge point lies
         within this distance (full-resolution px) after refinement.
     n_candidates : int
-        Accumulator peaks examined (scored and refined) per search, and at
-        least the Detector's ``max_results + 2``. The
+        Accumulator peaks examined (scored and refined) per search; when a
+        Detector asks for more results than this, ``max_results + 2``. The
         confidence is measured against the best of the others, so fewer
         peaks make it too high on look-alikes (see ``docs/method.md``).
     refine : bool

@@ -247,6 +247,7 @@ def make_detector(pattern, scale_range, angle_range, max_results, min_score, min
     config = Config(**cfg_kw)
     kind, sep, rest = pattern.partition(":")
     if sep and kind.strip().lower() == "curve" and not Path(pattern).is_file():
+        pattern_options(pattern)   # (none: says so)
         from ..core.detector import Detector as _D
 
         defaults = {k: v.default for k, v in inspect.signature(_D.__init__).parameters.items()}
@@ -288,7 +289,11 @@ def make_detector(pattern, scale_range, angle_range, max_results, min_score, min
                           max_results=max_results, min_score=min_score,
                           min_confidence=min_confidence, max_nfa=max_nfa)
                 kw.update(own)
-                p = Detector(p, config=config, **kw)
+                try:
+                    p = Detector(p, config=config, **kw)
+                except SeahoughError as e:   # (which pattern's settings)
+                    raise click.BadParameter(f"{name}: {spec}@...: {e}",
+                                             param_hint="PATTERN") from None
             pat[name] = p
     return Detector(pat, scale_range, angle_range, config=config,
                     max_results=max_results, min_score=min_score,
@@ -315,6 +320,9 @@ def pattern_options(spec: str):
     if Path(spec).is_file() or "@" not in spec:
         return spec, {}
     spec, _, opts = spec.rpartition("@")
+    if spec.strip().lower().startswith("curve:"):
+        raise click.BadParameter(f"{spec}@{opts}: curve:WIDTH takes no @ settings (give "
+                                 "--polarity, -n, --max-nfa)", param_hint="PATTERN")
     out = {}
     for item in opts.split(","):
         key, eq, value = (t.strip() for t in item.partition("="))
@@ -323,6 +331,9 @@ def pattern_options(spec: str):
                 f"{spec}@{opts}: expected @key=value,... with keys "
                 + ", ".join(PATTERN_OPTIONS) + f" (got {item.strip()!r})", param_hint="PATTERN")
         name = PATTERN_OPTIONS[key]
+        if name in out:
+            raise click.BadParameter(f"{spec}@{opts}: {key} is given twice",
+                                     param_hint="PATTERN")
         try:
             if name in ("scale_range", "angle_range"):
                 lo, colon, hi = value.partition(":")
@@ -408,7 +419,7 @@ def parse_patterns(spec: str):
     for part in spec.split("+"):
         name, rest = naming(part)
         rest = rest.strip()
-        name = rest.partition("@")[0].strip() if name is None else name.strip()
+        name = pattern_options(rest)[0].strip() if name is None else name.strip()
         if not name or not rest:
             raise click.BadParameter(f"{spec!r}: expected [NAME=]SPEC+[NAME=]SPEC..., got an "
                                      f"empty part {part!r}", param_hint="PATTERN")

@@ -377,8 +377,12 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
         raise click.UsageError("--max-width sizes the pictures of --out: give --out DIR")
     if pictures != PICTURES and out is None:
         raise click.UsageError("--pictures chooses the pictures of --out: give --out DIR")
+    if max_width is not None and "overlay" not in pictures:
+        raise click.UsageError("--max-width sizes the overlay, and --pictures leaves it out")
     if as_json and as_csv:
         raise click.UsageError("--json and --csv: give one of them")
+    if isinstance(detector, CurveSearch) and out is not None and "overlay" not in pictures:
+        raise click.UsageError("--pictures: curves have the overlay only")
     pat = None if detector.parts else detector.pattern   # (the inset: one pattern only)
     out_dir = _out_dir(out) if out is not None else None
     workers = min(workers or default_workers(), len(images))
@@ -405,14 +409,15 @@ CSV_COLUMNS = ("file", "width", "height", "found", "note", "time_ms", "rank", "p
 
 
 def _csv_line(values) -> str:
+    """One CSV row without its line end (a field holding a line break quoted)."""
     buf = io.StringIO()
-    csv.writer(buf, lineterminator="").writerow(values)
-    return buf.getvalue()
+    csv.writer(buf, lineterminator="\r\n").writerow(values)
+    return buf.getvalue()[:-2]
 
 
 def _csv_rows(name, w, h, note, ms, dets):
     """The CSV lines of one image (:data:`CSV_COLUMNS`)."""
-    head = [name, int(w), int(h), bool(dets), note, round(ms, 3)]
+    head = [name, int(w), int(h), "true" if dets else "false", note, round(ms, 3)]
     if not dets:
         return [_csv_line(head + [""] * (len(CSV_COLUMNS) - len(head)))]
     out = []

@@ -280,9 +280,13 @@ def _not_read(entries) -> str:
     if dirs:
         kinds.append(f"{len(dirs)} subfolder{'s' * (len(dirs) > 1)} of images, e.g. "
                      f"{printable(dirs[0])} (a folder is not searched inside)")
+    # .ts: a video when it is a transport stream (not TypeScript; a bounded look)
+    ts = {e.name for e, ext in entries if ext == ".ts" and e.name not in named}
+    ts_video = {e.name for e, ext in entries if e.name in ts and len(ts) <= 1000
+                and _transport_stream(e)} if len(ts) <= 1000 else ts
     for what, exts in (("video", VIDEO_EXTENSIONS), ("other picture", OTHER_PICTURES)):
         got = [ext for e, ext in entries if ext in exts and e.name not in named
-               and (ext != ".ts" or _transport_stream(e))]
+               and (ext != ".ts" or e.name in ts_video)]
         if got:
             kinds.append(f"{len(got)} {what} file{'s' * (len(got) > 1)} "
                          f"({', '.join(sorted(set(got)))})")
@@ -302,7 +306,7 @@ def _transport_stream(entry: os.DirEntry) -> bool:
             head = f.read(189)
     except OSError:
         return False
-    return head[:1] == b"\x47" and (len(head) < 189 or head[188:189] == b"\x47")
+    return len(head) == 189 and head[:1] == head[188:189] == b"\x47"
 
 
 def _entry(path: str) -> os.stat_result:

@@ -240,7 +240,6 @@ def _label_list(ax, items, corner: int = 1, at=None):
     return anchored
 
 
-#: Pattern kinds drawn from their outline (a shape), not from their image.
 def _image_px(shape_wh, box_wh) -> tuple[float, float]:
     """Size in px of an image of ``shape_wh`` (w, h) drawn in a box of
     ``box_wh`` px keeping its aspect."""
@@ -381,17 +380,16 @@ def colours(detections) -> list:
     return [COLOURS[i % len(COLOURS)] for i in range(len(detections))]
 
 
-def _cross_size(ax, d, is_line: bool, w: int, h: int) -> float:
+def _cross_size(ax, d, is_line: bool, wh, box_wh) -> float:
     """The origin's "+" in points: 16, or less on an object drawn smaller
-    than it (a small buoy's circle must show around it)."""
+    than it (a small buoy's circle must show around it); ``wh`` the image's
+    size, ``box_wh`` the box it is drawn in (px)."""
     if is_line or not d.outline:
         return 16.0
     pts = np.vstack([np.asarray(o, float).reshape(-1, 2) for o in d.outline])
     extent = float(min(np.ptp(pts[:, 0]), np.ptp(pts[:, 1])))
-    fig = ax.figure
-    pos = ax.get_position()
-    px_per_unit = pos.width * fig.get_size_inches()[0] * fig.dpi / max(w, 1)
-    return float(np.clip(0.6 * extent * px_per_unit * 72.0 / fig.dpi, 6.0, 16.0))
+    px_per_unit = _image_px(wh, box_wh)[0] / max(wh[0], 1)
+    return float(np.clip(0.6 * extent * px_per_unit * 72.0 / ax.figure.dpi, 6.0, 16.0))
 
 
 def _image_figure(image, max_width, bit_depth=None):
@@ -497,8 +495,8 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
                 if len(o) > 2:
                     o = np.vstack([o, o[:1]])
                 ax.plot(o[:, 0], o[:, 1], color=c, lw=2.2, path_effects=_OUTLINE)
-        ax.plot([d.x], [d.y], marker="+", ms=_cross_size(ax, d, is_line, w, h), mew=2.5,
-                color=c, path_effects=_OUTLINE)
+        ax.plot([d.x], [d.y], marker="+", ms=_cross_size(ax, d, is_line, (w, h), (iw, ih)),
+                mew=2.5, color=c, path_effects=_OUTLINE)
         if seg is not None:                 # its label on the segment, nearest the centre
             anchors.append(seg)
             lx, ly = _nearest_on(seg, d.x, d.y)
