@@ -501,7 +501,8 @@ def test_after_a_scene_change_the_previous_frame_takes_over(tmp_path):
     assert (rows[7]["status"], rows[7]["method"], rows[7]["ref"]) == ("measured", "previous", 6)
     assert rows[8]["ref"] == 6                      # B's first frame: the keyframe now
     assert all(r["status"] == "measured" for r in rows[8:])
-    assert res.summary["methods"]["previous"] == 1 and res.summary["flagged_pairs"] == 1
+    assert res.summary["methods"]["previous"] == 1 and res.summary["flagged_pairs"] == 2
+    assert rows[7]["flags"].startswith("after_gap: ") and res.summary["after_gap"] == [7]
     # B's motion, from its first frame (where the track was left), matches its truth
     for k in range(1, 5):
         est = compose(np.asarray(rows[6 + k]["matrix"]).reshape(2, 3),

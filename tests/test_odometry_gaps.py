@@ -168,7 +168,9 @@ def test_frames_without_edges_are_flagged_few_edges_not_no_match(tmp_path):
     res = run_odometry(frames, tmp_path, progress=False, mosaic=False)
     why = [r["flags"].split("; ")[0] if r["flags"] else "" for r in res.rows]
     assert why[1] == why[2] == "few_edges"      # the first keyframe is open water
-    assert why[3] == why[4] == ""               # the seabed: measured
+    # the seabed: measured, from frame 2 on, whose place (the origin's) is a guess
+    assert why[3] == "after_gap: measured against frame 2, whose pose was assumed"
+    assert why[4] == ""
     assert why[5] == "few_edges"                # a blank frame
     assert why[6] == why[7] == "", why
     assert why[8] in ("no_match", "low_confidence"), why   # edges, but not these
@@ -195,7 +197,7 @@ def test_the_trajectory_picture_marks_assumed_poses(tmp_path):
     assert not any(lab.startswith("flagged") for lab in labels)  # (not drawn twice)
     # a hollow marker, at the assumed position
     line = next(ln for ln in fig.axes[0].get_lines() if ln.get_label() == "pose assumed (1)")
-    assert line.get_markerfacecolor() in ("white", "w", (1.0, 1.0, 1.0, 1.0))
+    assert line.get_markerfacecolor() == "none"      # (hollow: the start shows through)
     assert (line.get_xdata()[0], line.get_ydata()[0]) == (res.rows[6]["x"], res.rows[6]["y"])
 
 
@@ -214,7 +216,8 @@ def test_a_jump_beyond_the_full_search_is_measured_by_the_wide_try(tmp_path, mon
     # without the wider region (twice -> once the full search's) the pair is flagged
     monkeypatch.setattr(O, "WIDEN", 1)
     res1, _ = _cut_run(tmp_path / "b", poses)
-    assert res1.rows[6]["status"] == "assumed" and res1.summary["flagged_pairs"] == 1
+    assert res1.rows[6]["status"] == "assumed" and res1.summary["flagged_pairs"] == 2
+    assert res1.rows[7]["flags"].startswith("after_gap: measured against frame 6")
 
 
 @pytest.mark.parametrize("turn, method", [(30.0, "previous"), (34.0, "wide")])
@@ -338,3 +341,21 @@ def test_a_survey_folder_of_an_earlier_format_is_refused_not_spliced(tmp_path):
             _check_same_survey(run, settings)
         run.write_settings(settings, settings_hash(settings))
         _check_same_survey(run, settings)                          # the same survey: fine
+
+
+def test_a_frame_measured_against_an_assumed_one_says_so(tmp_path):
+    # a new scene from frame 5 on: frame 5 is no match (assumed), frame 6 is
+    # measured against it: its step is right, but its place on the track
+    # rests on frame 5's guess, and so does every later one's (a new user
+    # kept the "measured" rows and got positions 160 px off, unflagged)
+    a, _ = _line(n=5, seed=3)
+    b, _ = _line(n=4, seed=11)
+    frames = list(a) + [cv2.flip(f, 1) for f in b]    # (another place: the second line mirrored)
+    res = run_odometry(frames, tmp_path, progress=False, mosaic=False)
+    rows = res.rows
+    assert rows[5]["status"] == "assumed"
+    assert rows[6]["status"] == "measured" and rows[6]["ref"] == 5
+    assert rows[6]["flags"] == "after_gap: measured against frame 5, whose pose was assumed"
+    assert res.summary["after_gap"] == [6]
+    assert res.summary["end_point"]["status"] == "measured"
+    assert all(not r["flags"] for r in rows[7:])

@@ -144,14 +144,14 @@ def test_plot_trajectory_draws_a_runs_metres_in_the_unit_asked_for(tmp_path):
              "flags": [], "status": "measured"} for i in range(4)]
     result = types.SimpleNamespace(rows=rows)
     title = lambda fig: fig.axes[0].get_title()  # noqa: E731
-    assert "0.8 m travelled" in title(plot.plot_trajectory(result, unit="m"))
-    assert "75.0 cm travelled" in title(plot.plot_trajectory(result, unit="cm"))
-    assert "300.0 px travelled" in title(plot.plot_trajectory(result))
+    assert "0.8 m measured" in title(plot.plot_trajectory(result, unit="m"))
+    assert "75.0 cm measured" in title(plot.plot_trajectory(result, unit="cm"))
+    assert "300.0 px measured" in title(plot.plot_trajectory(result))
     with pytest.raises(seahough.ParameterError, match="unit='m': this run has no metric"):
         plot.plot_trajectory(types.SimpleNamespace(rows=[dict(r, x_m=None, y_m=None)
                                                          for r in rows]), unit="m")
     rows[2].update(x=900.0, x_m=2.25, status="assumed", flags=["pose_assumed"])
-    assert "300.0 px travelled" in title(plot.plot_trajectory(rows))   # (1500 counted)
+    assert "300.0 px measured" in title(plot.plot_trajectory(rows))   # (1500 counted)
 
 
 def test_save_mosaic(tmp_path):

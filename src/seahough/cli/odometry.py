@@ -183,6 +183,12 @@ def report(result, seconds: float, unit: str, as_json: bool) -> int:
                        f"{printable(r.get('flags'))}")
     if n_flagged > 10:
         click.echo(f"  ... and {n_flagged - 10} more (see the CSV's flags column)")
+    gaps = summ["summary"].get("after_gap") or []
+    if gaps:
+        click.echo(f"  note: the track goes on after {len(gaps)} gap{'s' * (len(gaps) > 1)} "
+                   f"(frames {', '.join(str(g) for g in gaps[:10])}"
+                   f"{', ...' if len(gaps) > 10 else ''}): each step is measured, but the "
+                   "positions from there on carry the assumed poses before it")
     files = [summ[k] for k in ("csv", "json", "trajectory", "mosaic") if summ[k]]
     if files:
         click.echo("wrote: " + ", ".join(printable(f) for f in files))

@@ -222,6 +222,10 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
       (``assumed_poses``), but not in the mosaic (``mosaic_left_out``).
       The next frame is searched against the keyframe and against this
       frame, so the trajectory goes on from the next good pair.
+    - ``after_gap: measured against frame N, whose pose was assumed``: a
+      frame measured (its step, ``pair_matrix``, is) against a frame whose
+      pose was assumed: its place on the track, and every later one's,
+      carries that guess (the summary's ``after_gap`` lists these frames).
     """
     t_start = time.perf_counter()
     cfg = config or ODOMETRY_CONFIG
@@ -461,6 +465,9 @@ def _measure_frame(row, i, gray, feats, st: State, searcher: _Searcher, load):
         res = _checked(res, i, gray, feats, st, searcher, load, ref_rate)
     row["status"] = "measured"
     row["_cum"] = compose(res.matrix, ref_cum(st, res.ref))
+    if res.ref == st.prev and st.prev != st.meas:
+        # (its step is measured; its place rests on the guess of the frame before)
+        row["flags"] = f"after_gap: measured against frame {res.ref}, whose pose was assumed"
     row["ref"] = res.ref
     row["method"] = res.method
     row["confidence"] = res.confidence

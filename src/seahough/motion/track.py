@@ -262,9 +262,12 @@ class Totals:
         self.last_xy = None
         self.end = None
         self.ms_sum, self.ms_n = 0.0, 0
+        self.after_gap: list = []
 
     def add(self, r):
         self.frames += 1
+        if str(r.get("flags") or "").startswith("after_gap"):
+            self.after_gap.append(r["index"])
         self.measured += r["status"] == "measured"
         self.flagged += bool(r.get("flags"))
         self.unreadable += r["status"] == "unreadable"
@@ -280,7 +283,7 @@ class Totals:
                 if self.last_xy is not None:
                     self.length += math.hypot(r["x"] - self.last_xy[0], r["y"] - self.last_xy[1])
                 self.last_xy = (r["x"], r["y"])
-            self.end = {"index": r["index"], "x": r["x"], "y": r["y"],
+            self.end = {"index": r["index"], "status": r["status"], "x": r["x"], "y": r["y"],
                         "heading": r["heading"], "scale": r["scale"], "x_m": r.get("x_m"),
                         "y_m": r.get("y_m")}
         if r.get("ms") is not None:
@@ -335,6 +338,7 @@ def summarise(t: Totals, items, mpp, scale_range, angle_range, cfg, tuning, n_re
         "path_length_px": length,
         "path_length_m": length * mpp if mpp else None,
         "end_point": t.end,
+        "after_gap": list(t.after_gap),
         "mean_ms_per_frame": mean_ms,
         "resumed_rows": n_resumed,
         "wall_s": wall_s,

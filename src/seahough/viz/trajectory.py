@@ -88,9 +88,10 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
 
     Notes
     -----
-    The distance travelled in the title sums the steps between frames whose
-    pose was measured (an assumed pose, carried on from the last measured
-    one, would add motion that did not happen). The start is a green circle, the end a black square; frames whose pose
+    The distance in the title ("measured") sums the steps between frames
+    whose pose was measured (an assumed pose, carried on from the last
+    measured one, would add motion that did not happen): the path drawn
+    through assumed poses is longer. The start is a green circle, the end a black square; frames whose pose
     is assumed (status ``"assumed"`` or a ``pose_assumed`` flag: the motion
     of their pair could not be measured and was carried on from the last
     measured one) are hollow red circles, "pose assumed" in the legend;
@@ -112,7 +113,7 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
     ...          "flags": "no_match; pose_assumed: constant velocity since frame 1"}]
     >>> fig = plot_trajectory(rows, unit="m")   # path=...: also a PNG
     >>> fig.axes[0].get_title()   # (the assumed pose's step not counted)
-    'dead-reckoned path: 4 frames, 10.0 m travelled, 2 flagged'
+    'dead-reckoned path: 4 frames, 10.0 m measured, 2 flagged'
     >>> [t.get_text() for t in fig.axes[0].get_legend().get_texts()][-3:]
     ['flagged (1)', 'pose assumed (1)', 'heading']
     >>> tuple(int(v) for v in fig.get_size_inches() * fig.dpi)
@@ -140,14 +141,15 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
         ax.plot(xs[ok], ys[ok], "-", color="#1f5fbf", lw=2.2, label="dead reckoning")
         ax.plot(xs[ok], ys[ok], ".", color="#1f5fbf", ms=6)
         i0 = int(np.flatnonzero(ok)[0]); i1 = int(np.flatnonzero(ok)[-1])
-        ax.plot(xs[i0], ys[i0], "o", ms=12, color="#1aa442", mec="black", label="start", zorder=4)
-        ax.plot(xs[i1], ys[i1], "s", ms=11, color="black", label="end", zorder=4)
+        # (start and end over the flags' markers: an assumed first or last pose hid them)
+        ax.plot(xs[i0], ys[i0], "o", ms=12, color="#1aa442", mec="black", label="start", zorder=6)
+        ax.plot(xs[i1], ys[i1], "s", ms=11, color="black", mec="white", label="end", zorder=6)
         bad = flagged & ok & ~guessed
         if bad.any():
             ax.plot(xs[bad], ys[bad], "x", ms=11, mew=2.5, color="#e0001b",
                     label=f"flagged ({int(bad.sum())})", zorder=5)
         if guessed.any():
-            ax.plot(xs[guessed], ys[guessed], "o", ms=11, mfc="white", mec="#e0001b", mew=2.2,
+            ax.plot(xs[guessed], ys[guessed], "o", ms=11, mfc="none", mec="#e0001b", mew=2.2,
                     label=f"pose assumed ({int(guessed.sum())})", zorder=5)
         hd = np.array([_num(r.get("heading")) for r in rows], float)
         sel = np.flatnonzero(ok & np.isfinite(hd))
@@ -169,7 +171,7 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
     ax.set_xlabel(f"x ({unit})")
     ax.set_ylabel(f"y ({unit}, down as in the first frame)")
     if title is None:
-        title = (f"dead-reckoned path: {len(rows)} frames, {dist:.1f} {unit} travelled, "
+        title = (f"dead-reckoned path: {len(rows)} frames, {dist:.1f} {unit} measured, "
                  f"{int(flagged.sum())} flagged")
     ax.set_title(title, fontsize=12)
     if ok.any():
