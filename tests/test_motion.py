@@ -74,6 +74,12 @@ def test_a_blank_current_frame_is_named_as_such(caplog):
         assert seahough.estimate_motion(prev, np.full((240, 320), 90, np.uint8)) is None
     (why,) = [r.getMessage() for r in caplog.records if r.name == "seahough.motion"]
     assert why.startswith("no motion: the current frame has no edges to match"), why
+    # a blank previous frame alike (it raised PatternError: a loop over a dive stopped)
+    caplog.clear()
+    with caplog.at_level("INFO", logger="seahough.motion"):
+        assert seahough.estimate_motion(np.zeros((240, 320), np.uint8), prev) is None
+    (why,) = [r.getMessage() for r in caplog.records if r.name == "seahough.motion"]
+    assert why.startswith("no motion: the previous frame has no edges to match"), why
 
 
 def test_frames_of_different_sizes_are_refused():

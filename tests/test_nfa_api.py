@@ -186,6 +186,13 @@ def test_a_join_measured_across_reports_its_nfa(tmp_path, monkeypatch):
     assert seen == [math.inf]
     assert why == "" and mo is not None and 0.0 < mo.nfa <= 1.0
     assert "nfa" in C._MEASURE
+    # a blank earlier frame: few_edges (estimate_motion answers None for it)
+    cv2.imwrite(str(paths[0]), np.zeros((240, 320), np.uint8))
+    reader = FrameReader(paths, ODOMETRY_CONFIG.max_pixels)
+    mo, why = C.measure_across(reader, 0, 2, (0.9, 1.1), (-20.0, 20.0), ODOMETRY_CONFIG,
+                               OdometryTuning())
+    reader.close()
+    assert (mo, why) == (None, "few_edges")
 
 
 # ------------------------------------------------------------------------------- CLI

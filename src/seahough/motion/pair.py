@@ -179,8 +179,8 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
     Returns
     -------
     Motion or None
-        None: the motion cannot be told; why (the current frame has no
-        edges, nothing found, or which of ``min_confidence``,
+        None: the motion cannot be told; why (a frame has no edges: blank,
+        dark, featureless; nothing found, or which of ``min_confidence``,
         ``min_score``, ``max_nfa`` the best motion missed, with its
         figures) is logged at INFO level on the
         ``"seahough.motion"`` logger (``logging.basicConfig(level=logging.INFO)``
@@ -191,11 +191,6 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
     ImageSizeError
         A frame side under :data:`MIN_MOTION_SIDE` (64 px): too little of
         the scene to tell the motion from a look-alike.
-    PatternError
-        The previous frame has too few edges to be searched for (a blank
-        or featureless frame: "previous frame: ... too few edges"). A
-        current frame without edges is not an error: the motion is unknown
-        (None).
     ParameterError
         A bad parameter, or frames of different sizes.
     ImageReadError, ImageValueError
@@ -242,7 +237,11 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
     try:
         pattern = Pattern.from_frame(prev, config=cfg)
     except PatternError as e:
-        raise PatternError(f"previous frame: {e}") from None
+        # (a blank or featureless frame is data, as a blank current one: the
+        # motion is unknown, and a loop over a dive goes on)
+        log.info("no motion: the previous frame has no edges to match (blank, dark, "
+                 "overexposed or out of focus?): %s", e)
+        return None
     # (the pattern keeps its own 8-bit copy, or a float copy of fractional
     # levels; a large frame's float copies go at once: a 12 MP pair held 4 of
     # them, 190 MB, through the search)

@@ -40,6 +40,7 @@ import numpy as np
 
 from ..errors import ImageError, PatternError, SeahoughError
 from ..geometry import compose, invert_matrix, matrix_power, nearest_similarity
+from ..core.pattern import Pattern
 from ..motion.pair import estimate_motion
 from ..motion.track import iter_odometry_csv, pose_columns, row_to_csv
 
@@ -226,12 +227,14 @@ def measure_across(reader, p: int, q: int, scale_range, angle_range, config, tun
     try:
         mo = estimate_motion(reader.raw(p), reader.raw(q), sr, ar,
                              min_confidence=tuning.min_confidence, **kw)
-        if mo is None:   # why: nothing found, or nothing distinct enough
+        if mo is None:   # why: no edges, nothing found, or nothing distinct enough
+            try:   # (the earlier frame's edges: a join's pattern, built once more)
+                Pattern.from_frame(reader.raw(p), config=config)
+            except PatternError:
+                return None, "few_edges"
             loose = estimate_motion(reader.raw(p), reader.raw(q), sr, ar, min_confidence=0.0,
                                     **kw)
             return None, "no_match" if loose is None else "low_confidence"
-    except PatternError:   # (the earlier frame has too few edges to be searched for)
-        return None, "few_edges"
     except (SeahoughError, OSError):
         return None, "no_match"
     if mo.overlap < tuning.min_overlap:
