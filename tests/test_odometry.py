@@ -625,8 +625,10 @@ def _stopped_mid_run(tmp_path, script, sig, name):
     full = run_odometry(folder, tmp_path / "full", progress=False, mosaic=False)
     out = tmp_path / name
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")]))
+    # (SIGINT at its default: a suite started in the background inherits it ignored)
     proc = subprocess.Popen([sys.executable, "-c", script, str(folder), str(out)], env=env,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     csv_path = out / "odometry.csv"
     err = ""
     try:
@@ -680,6 +682,17 @@ def test_sigterm_stops_the_command_like_ctrl_c_and_the_run_resumes(tmp_path):
                                                     "term")
     assert proc.returncode == 143, err
     assert err.count("\n") == 1 and "terminated (SIGTERM)" in err and "Traceback" not in err
+    _resumes_to(folder, out, full)
+
+
+def test_ctrl_c_says_what_was_kept_and_how_to_go_on(tmp_path):
+    proc, err, folder, out, full = _stopped_mid_run(tmp_path, _TERM_SCRIPT, signal.SIGINT,
+                                                    "int")
+    assert proc.returncode == 130, err
+    (line,) = [ln for ln in err.splitlines() if ln]
+    n = len(read_odometry_csv(out / "odometry.csv"))
+    assert line == (f"seahough: error: interrupted: {n} frames kept in {out}/odometry.csv; "
+                    "the same command with --resume goes on from there"), line
     _resumes_to(folder, out, full)
 
 

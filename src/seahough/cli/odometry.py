@@ -129,12 +129,26 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
 
     unit = "m" if (metres_per_pixel is not None or altitude is not None) else "px"
     t0 = time.perf_counter()
-    result = run_odometry(list(frames), out, metres_per_pixel=metres_per_pixel,
-                          altitude=altitude, focal_px=focal_px, scale_range=scale_range,
-                          angle_range=angle_range, resume=resume,
-                          progress=not quiet and _stderr_is_terminal(), mosaic=not no_mosaic,
-                          workers=workers, **_bits(bit_depth))
+    try:
+        result = run_odometry(list(frames), out, metres_per_pixel=metres_per_pixel,
+                              altitude=altitude, focal_px=focal_px, scale_range=scale_range,
+                              angle_range=angle_range, resume=resume,
+                              progress=not quiet and _stderr_is_terminal(),
+                              mosaic=not no_mosaic, workers=workers, **_bits(bit_depth))
+    except KeyboardInterrupt:
+        raise KeyboardInterrupt(_kept(out)) from None
     return report(result, time.perf_counter() - t0, unit, as_json)
+
+
+def _kept(out) -> str:
+    """What an interrupted run in ``out`` kept, in words ("" when unknown)."""
+    try:
+        with open(Path(out) / "odometry.csv", newline="") as f:
+            n = max(sum(1 for _ in f) - 1, 0)
+    except OSError:
+        return ""
+    return (f"{n} frame{'s' * (n != 1)} kept in {printable(str(out))}/odometry.csv; the same "
+            "command with --resume goes on from there")
 
 
 def _bits(bit_depth) -> dict:
