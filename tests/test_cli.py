@@ -744,6 +744,9 @@ def test_simulate_from_a_photo_of_ones_own(tmp_path):
     assert_one_error_line(proc, "none.jpg: no such file")
     proc = run("simulate", "pair", "--out", tmp_path / "e", "--photo", photo, "--procedural")
     assert_one_error_line(proc, "photo and procedural")
+    cv2.imwrite(str(tmp_path / "black.png"), np.zeros((240, 320), np.uint8))
+    proc = run("simulate", "pair", "--out", tmp_path / "e", "--photo", tmp_path / "black.png")
+    assert_one_error_line(proc, "black.png: a flat picture (grey levels 0-0)")
     assert not (tmp_path / "d").exists() and not (tmp_path / "e").exists()
     # a 12-bit camera's photo in a 16-bit file: stretched by its bits, not darkened by 257
     cv2.imwrite(str(tmp_path / "floor12.png"),
@@ -874,3 +877,13 @@ def test_odometry_of_one_frame_says_there_is_nothing_to_measure(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout)["frames"] == 1
     assert "1 frame: no motion to measure" in proc.stderr
+
+
+def test_odometry_says_when_the_first_frame_may_be_the_odd_one(tmp_path):
+    frames, _ = sim.sequence(n_frames=4, frame_size=(240, 320), seed=1, source="procedural")
+    cv2.imwrite(str(tmp_path / "f0.png"), cv2.resize(frames[0], (640, 480)))
+    for i in range(1, 4):
+        cv2.imwrite(str(tmp_path / f"f{i}.png"), frames[i])
+    proc = run("odometry", tmp_path, "--out", tmp_path / "out", "--no-mosaic", "-q")
+    assert proc.returncode == 1
+    assert "note: every frame after the first has another size than the first" in proc.stdout

@@ -187,16 +187,20 @@ def report(result, seconds: float, unit: str, as_json: bool) -> int:
     click.echo(f"frames: {summ['frames']}   flagged frames: {summ['flagged_pairs']}   "
                f"distance: {summ['distance']:.2f} {summ['unit']}   "
                f"time per frame: {summ['time_per_frame_ms']:.0f} ms")
-    n_flagged = 0
+    n_flagged = n_sized = 0
     for r in _odometry_rows(result):
         if not r.get("flags"):
             continue
         n_flagged += 1
+        n_sized += "differs from the first frame's" in str(r.get("flags"))
         if n_flagged <= 10:
             click.echo(f"  flagged: frame {r.get('index')} {printable(r.get('file'))}: "
                        f"{printable(r.get('flags'))}")
     if n_flagged > 10:
         click.echo(f"  ... and {n_flagged - 10} more (see the CSV's flags column)")
+    if n_sized and n_sized == summ["frames"] - 1:
+        click.echo("  note: every frame after the first has another size than the first: "
+                   "the first may be the odd one (leave it out)")
     gaps = summ["summary"].get("after_gap") or []
     if gaps:
         click.echo(f"  note: the track goes on after {len(gaps)} gap{'s' * (len(gaps) > 1)} "

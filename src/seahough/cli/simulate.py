@@ -33,7 +33,8 @@ from ._common import PROG
               "data folder is present).")
 @click.option("--photo", type=click.Path(dir_okay=False), default=None, metavar="FILE",
               help="A seabed photo of yours to render the scenes from (a larger photo holds "
-              "a long sequence's views without magnifying them).")
+              "a long sequence's views without magnifying them). A photo taken underwater "
+              "has its water already: --water none keeps it as it is.")
 @click.option("--quiet", "-q", is_flag=True,
               help="No progress bar, hint or note; only the line saying what was written.")
 def simulate(kind, out, count, seed, water, marker_name, size, path_kind, procedural, photo,

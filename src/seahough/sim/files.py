@@ -95,7 +95,8 @@ def write_simulation(kind: str, out, *, n: int | None = None, seed: int = 0,
         shared data folder is present).
     photo : str or path-like, optional
         A seabed photo of one's own to render every scene from (not with
-        ``procedural``): a sequence or a pair is a camera's views of it, a
+        ``procedural``; a photo taken underwater has its water already:
+        ``water="none"`` keeps it as it is): a sequence or a pair is a camera's views of it, a
         marker or a rope lies on crops of it. A photo larger than the views
         need is not magnified (a sequence along a long path spans more than
         its frames: a photo magnified more than 2x to hold them is said so on
@@ -196,6 +197,9 @@ def _photo(path) -> np.ndarray:
     if img.dtype == np.uint16:
         depth = min(16, max(8, int(img.max()).bit_length()))
     out = to_bgr8(img, depth)
+    if float(out.std()) < 2.0:   # (no texture: every view would be blank)
+        raise ParameterError(f"photo {path}: a flat picture (grey levels {int(out.min())}-"
+                             f"{int(out.max())}): no seabed to render views of")
     out.setflags(write=False)
     return out
 

@@ -103,8 +103,9 @@ def sequence(image: ImageLike | None = None, *, n_frames: int = 20,
     rel = [compose(G[i], invert_matrix(G[i - 1])) for i in range(1, n)]
     overlap = min(_overlap_on_pixel_grid(r, (h, w)) for r in rel)
     if overlap < 0.6:
-        raise ParameterError(f"consecutive frames overlap by only {overlap:.0%} (< 60 %); "
-                             f"use a smaller step")
+        raise ParameterError(f"consecutive frames overlap by only {overlap:.0%} (< 60 %) at "
+                             f"{w}x{h} px and step={step:g} px: give larger frames (--size) "
+                             "or a smaller step")
     photo, P = _place_views(rng, image, source, [(Gi, (h, w)) for Gi in G], orient=heading0)
     waters = _water_per_frame(rng, water, n)
     frames = []
