@@ -72,16 +72,23 @@ def _odometry_summary(result, wall_s: float, unit: str) -> dict:
             "summary": s}
 
 
+def _finite(ctx, param, value):
+    """A click callback refusing nan and inf (FloatRange lets them through)."""
+    if value is not None and not math.isfinite(value):
+        raise click.BadParameter(f"{value!r}: expected a finite number")
+    return value
+
+
 @click.command(no_args_is_help=True)
 @click.argument("frames", nargs=-1, required=True, metavar="FRAMES...")
 @click.option("--out", "-o", required=True, type=click.Path(file_okay=False),
               help="Folder for the CSV/JSON track, the mosaic and the trajectory plot.")
 @click.option("--metres-per-pixel", type=click.FloatRange(0.0, min_open=True), default=None,
-              help="Ground size of a pixel, for positions in metres.")
+              callback=_finite, help="Ground size of a pixel, for positions in metres.")
 @click.option("--altitude", type=click.FloatRange(0.0, min_open=True), default=None,
-              help="Camera height above the bottom, metres (with --focal-px).")
+              callback=_finite, help="Camera height above the bottom, metres (with --focal-px).")
 @click.option("--focal-px", type=click.FloatRange(0.0, min_open=True), default=None,
-              help="Focal length in pixels (with --altitude).")
+              callback=_finite, help="Focal length in pixels (with --altitude).")
 @click.option("--scale-range", nargs=2, type=float, default=(0.9, 1.1), show_default=True,
               metavar="LOW HIGH", callback=_range_callback(True),
               help="Size change between frames (altitude change); LOW = HIGH: known.")
