@@ -23,6 +23,7 @@ and the plot) by the number of frames.
 
     python bench/bench_odometry.py            # full run (~1 min)
     python bench/bench_odometry.py --quick    # smoke test (~15 s)
+    python bench/bench_odometry.py --sizes    # drift of a turn at 320x240 and 640x480 (~2 min)
 """
 
 from __future__ import annotations
@@ -44,7 +45,7 @@ from seahough import sim as S  # noqa: E402
 from seahough._data import shared_data_dir  # noqa: E402
 from seahough.geometry import apply_matrix, invert_matrix  # noqa: E402
 import seahough.motion.odometry as odometry  # noqa: E402
-from seahough import list_frames, run_odometry  # noqa: E402
+from seahough import OdometryTuning, list_frames, run_odometry  # noqa: E402
 
 TARGET_MS = 30.0
 
@@ -125,10 +126,44 @@ def _load(folder, width=None):
     return out
 
 
+def drift_by_size(n=60, seeds=(0, 1)):
+    """Drift of a simulated turn of ``n`` frames at 320x240 and 640x480, at
+    the default keyframe policy and re-keyed on every frame: rows
+    ``(size, seed, policy, drift %, heading error deg, keyframes)``."""
+    photo = _photo()
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for h, w in ((240, 320), (480, 640)):
+            for seed in seeds:
+                frames, mats = S.sequence(photo, n_frames=n, frame_size=(h, w), path="turn",
+                                          seed=seed, source="auto" if photo else "procedural")
+                true_heading = math.degrees(math.atan2(mats[-1][1][0], mats[-1][0][0]))
+                for policy, tuning in (("default", None),
+                                       ("every frame", OdometryTuning(rekey_overlap=0.999))):
+                    res = run_odometry(frames, Path(tmp) / f"{w}{seed}{policy}", progress=False,
+                                       mosaic=False, workers=1,
+                                       **({"tuning": tuning} if tuning else {}))
+                    err = abs((res.rows[-1]["heading"] - true_heading + 180.0) % 360.0 - 180.0)
+                    rows.append((f"{w}x{h}", seed, policy, _drift(res, mats, (h, w)), err,
+                                 res.summary["keyframes"]))
+    return rows
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="fewer and shorter sequences")
+    ap.add_argument("--sizes", action="store_true",
+                    help="only the drift of a 60-frame simulated turn at 320x240 and 640x480, "
+                    "with the default keyframes and re-keyed on every frame (~2 min)")
     args = ap.parse_args(argv)
+    if args.sizes:
+        print(f"command: `{command()}`  ")
+        print(f"machine: {machine()}\n")
+        print("| frame | seed | keyframes policy | end drift | heading error | keyframes |")
+        print("| --- | ---: | --- | ---: | ---: | ---: |")
+        for size, seed, policy, drift, err, keys in drift_by_size():
+            print(f"| {size} | {seed} | {policy} | {drift:.2f} % | {err:.2f} deg | {keys} |")
+        return
     n = 12 if args.quick else 30
     photo = _photo()
     source = "a real photo (dtu_seabed_pair/scene1.png)" if photo else "the procedural seabed"
