@@ -125,6 +125,21 @@ def test_survey_chain_benchmark_runs():
         proc.stdout
 
 
+def test_odometry_drift_by_frame_size_runs():
+    """bench/bench_odometry.py --sizes's rows, on 8-frame turns of one seed."""
+    sys.path.insert(0, str(ROOT / "bench"))
+    try:
+        import bench_odometry as B
+    finally:
+        sys.path.remove(str(ROOT / "bench"))
+    rows = B.drift_by_size(n=8, seeds=(0,))
+    assert [(r[0], r[2]) for r in rows] == [("320x240", "default"), ("320x240", "every frame"),
+                                            ("640x480", "default"), ("640x480", "every frame")]
+    for size, seed, policy, drift, heading_err, keys in rows:
+        assert 0 <= drift < 5 and 0 <= heading_err < 3, (size, policy, drift, heading_err)
+        assert keys == 7 if policy == "every frame" else 1 <= keys <= 7
+
+
 @pytest.mark.skipif(not (DATA / "sequences" / "sparus_auv_seabed").is_dir(),
                     reason="needs ../shared/data/sequences")
 def test_survey_joins_benchmark_quick():
