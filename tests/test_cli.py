@@ -744,6 +744,9 @@ def test_simulate_from_a_photo_of_ones_own(tmp_path):
     assert_one_error_line(proc, "none.jpg: no such file")
     proc = run("simulate", "pair", "--out", tmp_path / "e", "--photo", photo, "--procedural")
     assert_one_error_line(proc, "photo and procedural")
+    # an option of another kind of scene is refused, not ignored
+    assert_one_error_line(run("simulate", "marker", "--path", "turn", "--out", tmp_path / "g"),
+                          "--path applies to sequence scenes, not marker")
     cv2.imwrite(str(tmp_path / "black.png"), np.zeros((240, 320), np.uint8))
     proc = run("simulate", "pair", "--out", tmp_path / "e", "--photo", tmp_path / "black.png")
     assert_one_error_line(proc, "black.png: a flat picture (grey levels 0-0)")

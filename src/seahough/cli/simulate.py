@@ -55,6 +55,12 @@ def simulate(kind, out, count, seed, water, marker_name, size, path_kind, proced
     docs/odometry.md), so you can test your own settings. A progress bar
     is shown on stderr for several scenes when stderr is a terminal.
     """
+    ctx = click.get_current_context()
+    for name, opt, kinds in (("path_kind", "--path", ("sequence",)),
+                             ("marker_name", "--marker", ("marker",))):
+        given = ctx.get_parameter_source(name) == click.core.ParameterSource.COMMANDLINE
+        if given and kind not in kinds:
+            raise click.UsageError(f"{opt} applies to {' and '.join(kinds)} scenes, not {kind}")
     o = Path(out)   # (created by write_simulation once its settings are checked)
     # a scene that cannot be written raises a SeahoughError: main() prints its one line
     notes = logging.getLogger("seahough.sim")
