@@ -211,8 +211,7 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, draw: Dr
         part = res.parts.get(which) if res.parts else None
         if part is not None:
             planes, feats = part.planes, part.features
-        acc_dets = [d for d in dets if d.pattern == which]
-        acc_title += f" of pattern {which}"
+        acc_title += f" of pattern {which}"   # (its detections numbered in the whole list)
     if "accumulator" in kinds:
         ac = Path(f"{base}_accumulator.png")
         plot.plot_accumulator(planes, acc_dets, ac, title=acc_title, note=res.note)

@@ -9,7 +9,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..geometry import wrap_angle
-from ._figure import COLOURS, _TEXT_OUTLINE, _figure, _finish
+from ._figure import _TEXT_OUTLINE, _figure, _finish
+from .detections import colours
 
 #: What the accumulator planes' heights are (see :func:`plot_accumulator`):
 #: votes over the number of pattern points, pooled over 2 x 2 position bins,
@@ -258,8 +259,9 @@ def plot_accumulator(planes, detections=(), path=None, *, title=None, note=None)
         ax2.set_title(f"{name} - " + ax2.get_title(), fontsize=11)
     shown = [(i, d) for i, d in enumerate(detections)
              if not name or getattr(d, "pattern", name) == name]
+    tint = colours(list(detections))   # (as the overlay: by pattern when several)
     for i, d in shown:
-        c = COLOURS[i % len(COLOURS)]
+        c = tint[i]
         a, sc = scale_angle_marker(planes, d.scale, d.angle)
         for ax, marks, px, py in ((ax1, marks1, d.x, d.y), (ax2, marks2, a, sc)):
             _ring(ax, px, py, c)
