@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import functools
 import json
 import math
 import os
@@ -892,12 +893,17 @@ def _step_disagreements(tmp_path, sequence, limit=10.0, config=None):
     return bad, compared
 
 
+@functools.lru_cache(maxsize=4)
+def _sift_features(path):
+    """SIFT key points and descriptors of an image file (each frame of a
+    sequence is in two pairs: computed once)."""
+    return cv2.SIFT_create().detectAndCompute(cv2.imread(path, cv2.IMREAD_GRAYSCALE), None)
+
+
 def _sift_similarity(a, b):
     """SIFT + ratio test + RANSAC similarity from image file ``a`` to ``b``
     (an independent reference), and its number of inliers."""
-    ga, gb = (cv2.imread(f, cv2.IMREAD_GRAYSCALE) for f in (a, b))
-    sift = cv2.SIFT_create()
-    (ka, da), (kb, db) = sift.detectAndCompute(ga, None), sift.detectAndCompute(gb, None)
+    (ka, da), (kb, db) = _sift_features(a), _sift_features(b)
     good = [p for p, q in cv2.BFMatcher().knnMatch(da, db, k=2) if p.distance < 0.75 * q.distance]
     src = np.float32([ka[m.queryIdx].pt for m in good])
     dst = np.float32([kb[m.trainIdx].pt for m in good])
