@@ -4,10 +4,9 @@ progress bars, range and number parsing, and pattern specs."""
 from __future__ import annotations
 
 import inspect
-import re
-
 import json
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -266,38 +265,28 @@ def make_detector(pattern, scale_range, angle_range, max_results, min_score, min
                                      param_hint="--max-results")
         return CurveSearch(_curve_width(pattern, rest), _SHAPE_POLARITY[polarity or "bright"],
                            config, max_results, max_nfa)
+    given = dict(scale_range=scale_range, angle_range=angle_range, max_results=max_results,
+                 min_score=min_score, min_confidence=min_confidence, max_nfa=max_nfa)
     named = parse_patterns(pattern)
     if named is None:
         spec, own = pattern_options(pattern)
         pat = parse_pattern(spec, own.pop("polarity", polarity), mask, config)
-        scale_range = own.pop("scale_range", scale_range)
-        angle_range = own.pop("angle_range", angle_range)
-        max_results = own.pop("max_results", max_results)
-        min_score = own.pop("min_score", min_score)
-        min_confidence = own.pop("min_confidence", min_confidence)
-        max_nfa = own.pop("max_nfa", max_nfa)
-    else:
-        if mask is not None:
-            raise click.BadParameter("--mask applies to a single image pattern, not to several "
-                                     "patterns", param_hint="--mask")
-        pat = {}
-        for name, spec in named:
-            spec, own = pattern_options(spec)
-            p = parse_pattern(spec, own.pop("polarity", polarity), None, config)
-            if own:   # (its own ranges or thresholds: a Detector of its own)
-                kw = dict(scale_range=scale_range, angle_range=angle_range,
-                          max_results=max_results, min_score=min_score,
-                          min_confidence=min_confidence, max_nfa=max_nfa)
-                kw.update(own)
-                try:
-                    p = Detector(p, config=config, **kw)
-                except SeahoughError as e:   # (which pattern's settings)
-                    raise click.BadParameter(f"{name}: {spec}@...: {e}",
-                                             param_hint="PATTERN") from None
-            pat[name] = p
-    return Detector(pat, scale_range, angle_range, config=config,
-                    max_results=max_results, min_score=min_score,
-                    min_confidence=min_confidence, max_nfa=max_nfa)
+        return Detector(pat, config=config, **{**given, **own})
+    if mask is not None:
+        raise click.BadParameter("--mask applies to a single image pattern, not to several "
+                                 "patterns", param_hint="--mask")
+    pat = {}
+    for name, spec in named:
+        spec, own = pattern_options(spec)
+        p = parse_pattern(spec, own.pop("polarity", polarity), None, config)
+        if own:   # (its own ranges or thresholds: a Detector of its own)
+            try:
+                p = Detector(p, config=config, **{**given, **own})
+            except SeahoughError as e:   # (which pattern's settings)
+                raise click.BadParameter(f"{name}: {spec}@...: {e}",
+                                         param_hint="PATTERN") from None
+        pat[name] = p
+    return Detector(pat, config=config, **given)
 
 
 #: A pattern's own options in a PATTERN of several (``SPEC@key=value,...``).

@@ -87,11 +87,9 @@ def _check_positive(**kw):
     """Sizes of a primitive shape: positive, at least MIN_SHAPE_SIZE and at
     most MAX_SHAPE_SIDE px."""
     for k, v in kw.items():
-        x = number(k, v)   # (a number, finite)
-        if x < MIN_SHAPE_SIZE:   # (0 and negative sizes too: the same message)
+        if number(k, v, hi=MAX_SHAPE_SIDE) < MIN_SHAPE_SIZE:   # (0 and negatives alike)
             raise ParameterError(f"{k}={v!r}: must be at least {MIN_SHAPE_SIZE:g} px (a shape "
                                  "thinner than a pixel has no two borders to find)")
-        number(k, v, hi=MAX_SHAPE_SIDE)
 
 
 def _check_polarity(polarity, allowed=POLARITIES):

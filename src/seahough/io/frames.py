@@ -282,8 +282,8 @@ def _not_read(entries) -> str:
                      f"{printable(dirs[0])} (a folder is not searched inside)")
     # .ts: a video when it is a transport stream (not TypeScript; a bounded look)
     ts = {e.name for e, ext in entries if ext == ".ts" and e.name not in named}
-    ts_video = {e.name for e, ext in entries if e.name in ts and len(ts) <= 1000
-                and _transport_stream(e)} if len(ts) <= 1000 else ts
+    ts_video = ts if len(ts) > 1000 else {e.name for e, _ in entries
+                                          if e.name in ts and _transport_stream(e)}
     for what, exts in (("video", VIDEO_EXTENSIONS), ("other picture", OTHER_PICTURES)):
         got = [ext for e, ext in entries if ext in exts and e.name not in named
                and (ext != ".ts" or e.name in ts_video)]
@@ -298,9 +298,7 @@ def _transport_stream(entry: os.DirEntry) -> bool:
     188-byte packets start with the sync byte 0x47, "G"), not TypeScript
     source. Only a regular file is opened (a named pipe would block)."""
     try:
-        if not entry.is_file():
-            return False
-        if not stat.S_ISREG(os.stat(entry.path).st_mode):
+        if not entry.is_file():   # (a regular file, or a link to one)
             return False
         with open(entry.path, "rb") as f:
             head = f.read(189)
