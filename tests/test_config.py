@@ -5,7 +5,7 @@ import dataclasses
 import pytest
 
 import seahough
-from seahough.config import ODOMETRY_CONFIG, OdometryTuning, SearchTuning
+from seahough.config import ODOMETRY_CONFIG, Config, OdometryTuning, SearchTuning
 
 
 @pytest.mark.parametrize("field, value", [("screen", 1.5), ("icp_points", 2.5), ("peak_radius", -1),
@@ -68,3 +68,15 @@ def test_config_max_memory_mb_reaches_every_reader(tmp_path):
     assert all("max_memory_mb" in r["flags"] for r in res.rows)
     with pytest.raises(seahough.ParameterError, match="max_memory_mb"):
         seahough.Config(max_memory_mb=0)
+
+
+def test_smooth_is_a_sigma_that_photo_patterns_share():
+    import math
+
+    from seahough.errors import ParameterError
+
+    assert Config().smooth == 0.0 and Config().photo_blur == Config().pattern_blur
+    assert math.isclose(Config(smooth=2.0).photo_blur, math.hypot(1.0, 2.0))
+    for bad in (-1.0, float("nan"), 1000.0):
+        with pytest.raises(ParameterError, match="smooth"):
+            Config(smooth=bad)

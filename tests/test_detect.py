@@ -376,3 +376,43 @@ def test_more_results_asked_than_candidates_are_found():
         dets = seahough.Detector(disc, scale_range=(0.5, 2), max_results=n).detect(img)
         assert len(dets) == want, (n, len(dets))
         assert all(abs(d.scale - 1) < 0.05 for d in dets)
+
+
+def _letterboxed(seed=3):
+    """A 492x360 video frame of a murky pool: soft texture, a bright post
+    12 px wide at x = 250, black bars 6 px wide at both sides (JPEG noise)."""
+    rng = np.random.default_rng(seed)
+    img = cv2.GaussianBlur(rng.uniform(0, 255, (360, 492)).astype(np.float32), (0, 0), 4)
+    img = 70 + (img - img.mean()) * 3.0
+    img[100:300, 244:256] += 90
+    img[:, :6] = rng.uniform(0, 2, (360, 6))
+    img[:, -6:] = rng.uniform(0, 2, (360, 6))
+    return np.clip(img, 0, 255).astype(np.uint8)
+
+
+def test_letterbox_bars_of_a_video_frame_are_no_lines():
+    """The step from a black letterbox bar to the picture is a long straight
+    edge on every frame of such a video: no post, line or rope is reported
+    there (the image's blank border is filled from its content), and the
+    post in the picture is still found where it is."""
+    img = _letterboxed()
+    det = seahough.Detector(seahough.Pattern.line(120, 12), (0.5, 2.0), (60.0, 120.0))
+    found = det.detect(img)
+    assert found and abs(found[0].x - 250) < 3
+    assert all(12 < d.x < 480 for d in found), [(d.x, d.y, d.nfa) for d in found]
+    # several patterns at once: the same
+    both = seahough.Detector({"post": det, "disc": seahough.Detector(seahough.Pattern.circle(16))})
+    assert all(12 < d.x < 480 for d in both.detect(img) if d.pattern == "post")
+
+
+def test_letterbox_bars_of_real_pool_video_are_no_gate_posts():
+    """RoboSub pool frames with black side bars (6 px): searched for gate
+    posts as lines, no detection lies on a bar's edge (each frame had one or
+    two there, at NFA down to 5e-10)."""
+    det = seahough.Detector(seahough.Pattern.line(120, 12), (0.5, 2.0), (60.0, 120.0))
+    for n in (1024, 1026, 1030, 1033):
+        img = cv2.imread(str(data_path("objects", "robosub_transdec", "images", f"{n}.jpg")))
+        w = img.shape[1]
+        for d in det.detect(img):
+            assert 15 < d.x < w - 15, (n, d.x, d.y, d.nfa)
+

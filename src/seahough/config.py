@@ -208,6 +208,12 @@ class Config:
         best on the fragment benchmark (80 % found at 0, 96 % at 1.0); 0
         turns it off. Shapes and previous frames (which pass through the
         same water as the searched image) are never blurred.
+    smooth : float
+        Gaussian sigma (image pixels) applied to a searched image before
+        its edges are found: speckle (sonar), grain, marine snow that makes
+        edges of its own. 0 (the default): none. A pattern cut from such an
+        image (:meth:`Pattern.from_image`) gets it too, on top of
+        ``pattern_blur`` (their root sum of squares: :attr:`photo_blur`).
     segment_steps : int
         How many pixels a segment is traced along the edge on each side of
         its key point.
@@ -278,6 +284,7 @@ class Config:
     colour: bool | None = None
     colour_boost: float = 4.0
     pattern_blur: float = 1.0
+    smooth: float = 0.0
     segment_steps: int = 2
     segment_angle_tol: float = 30.0
     max_segments: int = 10000
@@ -317,6 +324,7 @@ class Config:
         check("match_radius", lo=0.0, lo_open=True, hi=100.0)
         check("min_gradient", lo=0.0)
         check("pattern_blur", lo=0.0, hi=100.0)
+        check("smooth", lo=0.0, hi=100.0)
         check("colour_boost", lo=1.0, hi=100.0)
         check("chain_length", lo=0.0, hi=10_000.0)
         for name in ("segment_angle_tol", "angle_tolerance"):
@@ -341,6 +349,12 @@ class Config:
             check("angle_bin", lo=0.1, hi=360.0)
         if self.scale_step is not None:
             check("scale_step", lo=0.001, hi=1.0)
+
+    @property
+    def photo_blur(self) -> float:
+        """The Gaussian sigma a photo pattern is blurred by: ``pattern_blur``
+        and ``smooth`` (root sum of squares)."""
+        return math.hypot(self.pattern_blur, self.smooth)
 
     def replace(self, **changes) -> "Config":
         """A copy with some fields changed (validated again)."""

@@ -220,3 +220,22 @@ def test_curve_to_dict_round_trips_through_json():
 def test_public_names():
     assert seahough.find_curves is C.find_curves and seahough.Curve is C.Curve
     assert {"find_curves", "Curve"} <= set(seahough.__all__)
+
+
+def test_a_pipe_in_speckled_sonar_is_found_once_the_speckle_is_smoothed():
+    """A soft pipeline across a forward-looking sonar crop (real data):
+    speckle makes edges of its own and nothing is found; with
+    Config(smooth=3) the pipe is, along its length (a user trial found the
+    CLI had no way to smooth)."""
+    import cv2
+
+    from conftest import data_path
+
+    img = cv2.imread(str(data_path("sonar", "nksid_fls", "soft_pipeline_img_62.jpg")), 0)
+    assert seahough.find_curves(img, 10) == []
+    [c] = seahough.find_curves(img, 10, config=seahough.Config(smooth=3.0))
+    assert c.length > 150 and 8 < c.width < 13
+    # its ends: the pipe runs from the lower right (140, 220) up to the left edge
+    ends = sorted([tuple(c.points[0]), tuple(c.points[-1])])
+    assert ends[0][0] < 15 and 60 < ends[0][1] < 110, ends
+    assert ends[1][0] > 125 and ends[1][1] > 200, ends

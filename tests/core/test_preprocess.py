@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from seahough.config import Config
-from seahough.core.preprocess import choose_factor, compute_gradients, scale_image, colour_metric
+from seahough.core.preprocess import (blank_border, choose_factor, colour_metric, compute_gradients,
+                                      fill_blank_border, scale_image)
 
 
 def _direction(g, y, x):
@@ -254,3 +255,56 @@ def test_weighed_colours_keep_the_sign_of_the_channels_as_they_are():
     w = compute_gradients(img, metric=4.0).metric
     d = w @ np.array([-14.0, 12.0, 12.0])
     assert float(np.sum(d * np.abs(d))) < 0
+
+
+def _textured(h=120, w=160, seed=0):
+    return np.random.default_rng(seed).uniform(40, 220, (h, w)).astype(np.float32)
+
+
+@pytest.mark.parametrize("side", ["left", "right", "top", "bottom"])
+def test_a_letterbox_bar_on_any_side_is_a_blank_border(side):
+    img = _textured()
+    noise = np.random.default_rng(1).uniform(0, 2.5, img.shape).astype(np.float32)  # JPEG-like
+    sl = {"left": np.s_[:, :7], "right": np.s_[:, -7:], "top": np.s_[:9], "bottom": np.s_[-9:]}
+    img[sl[side]] = noise[sl[side]]
+    want = {"left": (9, 0, 160, 120), "right": (0, 0, 151, 120), "top": (0, 11, 160, 120),
+            "bottom": (0, 0, 160, 109)}
+    assert blank_border(img) == want[side]
+    out = fill_blank_border(img)
+    x0, y0, x1, y1 = want[side]
+    assert out.shape == img.shape
+    assert (out[y0:y1, x0:x1] == img[y0:y1, x0:x1]).all()        # the content untouched
+    edge = {"left": out[:, :x0] == out[:, x0:x0 + 1], "right": out[:, x1:] == out[:, x1 - 1:x1],
+            "top": out[:y0] == out[y0:y0 + 1], "bottom": out[y1:] == out[y1 - 1:y1]}
+    assert edge[side].all()                                      # its lines repeated outwards
+
+
+def test_what_is_not_a_blank_border():
+    img = _textured()
+    assert blank_border(img) == (0, 0, 160, 120)
+    assert fill_blank_border(img) is img                         # (no copy)
+    # a dark border with texture (vignetting) is content
+    dark = img.copy()
+    dark[:, :20] *= 0.05
+    assert blank_border(dark) == (0, 0, 160, 120)
+    # a flat grey band is blank; colour images are judged on their mean
+    band = np.dstack([img, img, img])
+    band[:24] = (40, 45, 42)
+    assert blank_border(band) == (0, 26, 160, 120)
+    # more than half the image blank: no border taken (a frame mostly empty)
+    most = img.copy()
+    most[:, :42] = 0
+    most[:, -42:] = 0
+    assert blank_border(most) == (0, 0, 160, 120)
+    flat = np.full((120, 160), 90, np.float32)
+    assert blank_border(flat) == (0, 0, 160, 120)
+
+
+def test_a_drawn_scene_s_flat_background_is_no_border():
+    """A flat background level with the picture beside it (a drawn scene, a
+    rectangle near its edge) is the scene's: nothing filled, the object's
+    edge near the frame stays where it is."""
+    img = np.full((120, 160), 60, np.float32)
+    img[12:50, 30:90] = 200                       # 12 rows from the top
+    assert blank_border(img) == (0, 0, 160, 120)
+    assert fill_blank_border(img) is img

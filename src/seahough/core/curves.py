@@ -70,6 +70,7 @@ from ..errors import ParameterError
 from ..io.images import to_gray
 from .detector import FLAG_AMBIGUOUS, Detection, Detector
 from .pattern import Pattern
+from .preprocess import prepare_image
 
 __all__ = ["Curve", "find_curves", "FLAG_LEAVES_IMAGE", "FLAG_GAP", "FLAG_MAX_PIECES",
            "STEP_NFA_SHARE"]
@@ -525,8 +526,9 @@ def find_curves(image, width, *, width_range=(0.5, 1.5), polarity="bright",
     min_len = (_MIN_PIECES * length if min_length is None
                else number("min_length", min_length, lo=0.0))
     cfg = config or Config()
-    gray = to_gray(image, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb,
-                   bit_depth=cfg.bit_depth)
+    gray = prepare_image(to_gray(image, max_pixels=cfg.max_pixels,
+                                 max_memory_mb=cfg.max_memory_mb, bit_depth=cfg.bit_depth), cfg)
+    cfg = cfg.replace(smooth=0.0)             # (smoothed once, above)
     # a step searches a small region: its few peaks need fewer candidates
     step_cfg = cfg.replace(n_candidates=min(cfg.n_candidates, _STEP_CANDIDATES))
     curves: list[Curve] = []

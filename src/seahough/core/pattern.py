@@ -358,7 +358,7 @@ class Pattern:
                 config.n_verify_points, config.min_gradient, config.segment_steps,
                 config.segment_angle_tol, config.max_segments, config.equalize,
                 config.local_contrast, config.local_window,
-                config.pattern_blur if self.is_photo else 0.0,
+                config.photo_blur if self.is_photo else 0.0,
                 3 if self.in_colour(config) else 2)
 
     def grey_levels(self) -> np.ndarray:
@@ -421,8 +421,8 @@ class Pattern:
         key = ("long borders", config.chain_length, config.min_gradient, self.in_colour(config))
         if key not in self._cache:
             img = np.ascontiguousarray(self._edges_from(config), np.float32)
-            if config.pattern_blur > 0:   # (as its features see it: a crisp staircase is not)
-                img = cv2.GaussianBlur(img, (0, 0), config.pattern_blur,
+            if config.photo_blur > 0:   # (as its features see it: a crisp staircase is not)
+                img = cv2.GaussianBlur(img, (0, 0), config.photo_blur,
                                        borderType=cv2.BORDER_REPLICATE)
             f = extract_features(img, 1.0, config.replace(chain_length=0.0),
                                  mask=self._edge_mask)
@@ -510,11 +510,11 @@ class Pattern:
         gray = self._edges_from(config)
         if self.polarity == "dark":
             gray = 255.0 - gray
-        if self.is_photo and config.pattern_blur > 0:
+        if self.is_photo and config.photo_blur > 0:
             # a crop of a clear photo, searched through water: its finest
             # texture would not be there to match (Config.pattern_blur)
             gray = cv2.GaussianBlur(np.ascontiguousarray(gray, np.float32), (0, 0),
-                                    config.pattern_blur, borderType=cv2.BORDER_REPLICATE)
+                                    config.photo_blur, borderType=cv2.BORDER_REPLICATE)
         return gray
 
     def _compute_features(self, factor: float, config: Config) -> PatternFeatures:

@@ -76,6 +76,112 @@ def choose_factor(shape: tuple[int, int], config: Config,
     return float(f)
 
 
+#: a frame's outermost line is blank (a video's letterbox bar, a camera's
+#: black or grey band) when its levels vary by less than this standard
+#: deviation (0-255 levels): the black bars of the RoboSub pool videos have
+#: 0.5-1.0 (JPEG noise), a flat grey band 0; the darkest vignetted border
+#: of the real sequences (the amphora wreck's corners) 6.7, textured sand
+#: more. Only lines all flat count: a dark border with texture is content.
+BLANK_STD = 2.0
+#: at most this share of each side is taken for a blank border (a side
+#: flat farther in: no border, the picture's own flat background)
+BLANK_DEPTH = 0.25
+#: ... and only when the picture next to it lies this many levels (median of
+#: its line) from the band's: a drawn scene's flat background, level with
+#: the picture's, is no border (an object near its edge stays as it is)
+BLANK_STEP = 10.0
+#: lines beyond a blank border left out too: the JPEG-smeared line between
+#: bar and content (RoboSub: a column at 43 between 0 and 82)
+BLANK_MARGIN = 2
+
+
+def blank_border(gray: np.ndarray) -> tuple[int, int, int, int]:
+    """(x0, y0, x1, y1), end exclusive: the image without its blank border
+    (flat lines at an edge: letterbox bars, a uniform band, whose level
+    differs from the picture's next to them by :data:`BLANK_STEP`) and
+    :data:`BLANK_MARGIN` lines more on each side that has one; the whole
+    image when it has none, or when they would leave less than half of it.
+
+    Examples
+    --------
+    >>> img = np.random.default_rng(0).uniform(60, 200, (60, 80)).astype(np.float32)
+    >>> img[:, :6] = 0                               # a letterbox bar
+    >>> blank_border(img)
+    (8, 0, 80, 60)
+    """
+    g = gray
+    h, w = g.shape[:2]
+    colour = g.ndim == 3
+
+    def grey(a: np.ndarray) -> np.ndarray:      # (a colour image's lines only, not all of it)
+        return a.mean(axis=-1) if colour else a
+
+    def depth(lines: np.ndarray) -> int:
+        # lines: the side's outermost lines as rows, outermost first (most
+        # images: the first alone decides)
+        if lines.shape[0] == 0 or grey(lines[0]).std() >= BLANK_STD:
+            return 0
+        lines = grey(lines)
+        flat = lines.std(axis=1) < BLANK_STD
+        if flat.all():                # a quarter of the side flat: a scene's background
+            return 0
+        n = int(np.argmin(flat))
+        inside = lines[min(n + BLANK_MARGIN, lines.shape[0] - 1)]
+        if abs(float(np.median(inside)) - float(lines[n - 1].mean())) < BLANK_STEP:
+            return 0                  # the picture goes on at the band's level: its background
+        return n + BLANK_MARGIN
+
+    ly, lx = int(h * BLANK_DEPTH), int(w * BLANK_DEPTH)
+    top, bottom = depth(g[:ly]), depth(g[h - ly:][::-1])
+    left = depth(np.swapaxes(g[:, :lx], 0, 1))
+    right = depth(np.swapaxes(g[:, w - lx:][:, ::-1], 0, 1))
+    if not (top or bottom or left or right):
+        return (0, 0, w, h)
+    box = (left, top, w - right, h - bottom)
+    if box[2] - box[0] < w // 2 or box[3] - box[1] < h // 2:
+        return (0, 0, w, h)
+    return box
+
+
+def fill_blank_border(image: np.ndarray) -> np.ndarray:
+    """``image`` with its :func:`blank_border` replaced by its content's
+    outermost lines repeated outwards, so that the step between a letterbox
+    bar and the picture is no edge (a post, a line, a rope along the frame
+    on every video frame); the same array when it has none. Positions are
+    unchanged.
+
+    Examples
+    --------
+    >>> img = np.random.default_rng(0).uniform(60, 200, (60, 80)).astype(np.float32)
+    >>> img[:, :6] = 0
+    >>> out = fill_blank_border(img)
+    >>> bool((out[:, :8] == out[:, 8:9]).all()), out.shape
+    (True, (60, 80))
+    """
+    h, w = image.shape[:2]
+    x0, y0, x1, y1 = blank_border(image)
+    if (x0, y0, x1, y1) == (0, 0, w, h):
+        return image
+    return cv2.copyMakeBorder(image[y0:y1, x0:x1], y0, h - y1, x0, w - x1, cv2.BORDER_REPLICATE)
+
+
+def prepare_image(image: np.ndarray, config: Config) -> np.ndarray:
+    """A searched image as the search sees it: its blank border filled
+    (:func:`fill_blank_border`) and, with ``Config.smooth``, blurred by that
+    Gaussian sigma (speckle, grain). Positions are unchanged.
+
+    >>> img = np.zeros((40, 60), np.float32); img[:, 30:] = 200
+    >>> out = prepare_image(img, Config(smooth=2.0))
+    >>> float(out[20, 29]) > 0 and float(out[20, 30]) < 200
+    True
+    """
+    image = fill_blank_border(image)
+    if config.smooth > 0:
+        image = cv2.GaussianBlur(np.ascontiguousarray(image, np.float32), (0, 0), config.smooth,
+                                 borderType=cv2.BORDER_REPLICATE)
+    return image
+
+
 def scale_image(gray: np.ndarray, factor: float) -> tuple[np.ndarray, float, float]:
     """Downscale with area averaging (a grey or a colour image, every
     channel alike); returns (image, fx, fy)."""
