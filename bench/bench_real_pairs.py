@@ -82,6 +82,19 @@ OBLIQUE = ("subvo_pool_chain",)
 AGREE = 0.005      # the two reference fits agree within this share of the diagonal
 GOOD = 0.01        # an answer "within 1 %"
 WRONG = 0.03       # an answer "off by more than 3 %"
+#: what the fits' spread column of the reference table says (the table's figures)
+FITS_TEXT = [
+    "The spread of similarity fits: the same SIFT-lowc matches fitted again by other robust "
+    "criteria (RANSAC at 1, 2 and 5 px instead of the reference's 3 px, and least median of "
+    "squares: bench/peers.py similarity_fits), the largest corner distance among the five "
+    "matrices. Where the motion is not a similarity (3-D relief, a tilted or oblique camera) "
+    "each criterion keeps other matches and the pair's \"similarity\" lands elsewhere: that "
+    "column is how far it is defined by the frames, the SIFT-KLT gap how far two fits of one "
+    "criterion (RANSAC at 3 px, refined on its inliers) agree. Issue 13's step target is judged "
+    "against the second, as the issue states it; the first is shown beside it "
+    "(\"fits\") so that a step error between the two reads as an error within the pair's own "
+    "ambiguity, not as a miss of that size. It is not a target and no code was tuned on it.",
+]
 TARGET = 0.97      # issue 13: answer rate and share of answers within 1 %
 QUICK_PAIRS = 2
 #: seahough measured again on the frames cropped by this many pixels at the
@@ -188,6 +201,19 @@ def load(folder: Path, half: bool, limit=None):
     return files, frames
 
 
+def _sift_lowc(a, b):
+    """(SIFT-lowc + RANSAC fit, its matched points)."""
+    pts = peers.matched_points("sift-lowc", a, b)
+    return peers._ransac(*pts), pts
+
+
+def fit_spread(fits, shape) -> float:
+    """Largest corner distance between any two of the matrices (px)."""
+    fits = [f for f in fits if f is not None]
+    return max((corner_error(f, g, shape) for i, f in enumerate(fits) for g in fits[i + 1:]),
+               default=math.nan)
+
+
 def measure_pairs(seq: str, size: str, frames) -> list[dict]:
     """One record per consecutive pair: the reference and every method's answer."""
     shape = frames[0].shape[:2]
@@ -197,7 +223,7 @@ def measure_pairs(seq: str, size: str, frames) -> list[dict]:
     out = []
     for i in range(len(frames) - 1):
         a, b = frames[i], frames[i + 1]
-        sift, sift_ms = cpu_timed(peers.feature_pair, "sift-lowc", a, b)
+        (sift, pts), sift_ms = cpu_timed(_sift_lowc, a, b)
         ans = {}
         for name, fn in METHOD_FNS.items():
             r, ms = cpu_timed(fn, a, b)
@@ -209,7 +235,9 @@ def measure_pairs(seq: str, size: str, frames) -> list[dict]:
             v["err"] = corner_error(v["matrix"], ref, shape) if ref is not None else math.nan
         out.append(dict(seq=seq, size=size, shape=shape, pair=i, ref=ref, why=why,
                         sift_lowc=sift.matrix, sift_lowc_ms=sift_ms, ans=ans,
-                        ref_gap=corner_error(sift.matrix, ans[SECOND_METHOD]["matrix"], shape)))
+                        ref_gap=corner_error(sift.matrix, ans[SECOND_METHOD]["matrix"], shape),
+                        fit_spread=fit_spread([sift.matrix, *peers.similarity_fits(*pts)],
+                                              shape)))
     return out
 
 
@@ -456,8 +484,11 @@ def report(recs: list[dict], odo: list[dict], args, seconds: float, allocator: s
         d = diagonal(o["shape"])
         g = [r["ref_gap"] / d for r in recs if r["seq"] == o["seq"] and r["size"] == at
              and r["ref"] is not None]
+        f = [r["fit_spread"] / d for r in recs if r["seq"] == o["seq"] and r["size"] == at
+             and r["ref"] is not None]
         spread.append((o["seq"], 100 * float(np.median([t["err"] / d for t in o["steps"]])),
-                       100 * float(np.median(g)) if g else math.nan))
+                       100 * float(np.median(g)) if g else math.nan,
+                       100 * float(np.nanmedian(f)) if f else math.nan))
     L += ["## Targets", "",
           *table(["check", "part", "measured", "target", "result"], [
               ["estimate_motion answers", "test", pct(s["answered"], s["scored"]),
@@ -473,9 +504,10 @@ def report(recs: list[dict], odo: list[dict], args, seconds: float, allocator: s
                met(bool(odo_rate) and all(k >= TARGET * n for _, k, n in odo_rate))],
               [f"dead reckoning: median step error / median SIFT-{SECOND} gap, % of the "
                f"diagonal, {at} size", "test",
-               "; ".join(f"{q} {fnum(a, 2)} / {fnum(b, 3)}" for q, a, b in spread),
+               "; ".join(f"{q} {fnum(a, 2)} / {fnum(b, 3)} (fits: {fnum(c, 2)})"
+                         for q, a, b, c in spread),
                "no larger, every sequence",
-               met(bool(spread) and all(a <= b for _, a, b in spread))],
+               met(bool(spread) and all(a <= b for _, a, b, _ in spread))],
               [f"dead-reckoning steps off > 3 % at NFA <= {MAX_NFA:g} (issue 14)", "all",
                str(odo_wrong_nfa), "none", met(odo_wrong_nfa == 0)],
               *([[f"the same two checks on the frames cropped by {crop_names} px "
@@ -524,14 +556,18 @@ def report(recs: list[dict], odo: list[dict], args, seconds: float, allocator: s
             dis = [r for r in g if r["why"].startswith("disagree")]
             miss = [r for r in g if r["why"].startswith("no ")]
             agree = [r["ref_gap"] / diagonal(r["shape"]) for r in g if r["ref"] is not None]
+            fits = [r["fit_spread"] / diagonal(r["shape"]) for r in g if r["ref"] is not None]
             sh = g[0]["shape"]
             rows.append([seq, f"{size} {sh[1]}x{sh[0]}", len(g), pct(len(g) - len(dis) - len(miss),
                          len(g)), len(dis), len(miss),
                          fnum(100 * float(np.median(agree)) if agree else math.nan, 3),
+                         fnum(100 * float(np.nanmedian(fits)) if fits else math.nan, 2),
                          fnum(float(np.median([r["sift_lowc_ms"] for r in g])), 0)])
     L += ["## Reference motions", "",
           *table(["sequence", "size", "pairs", "with a reference", f"SIFT-lowc and {SECOND} disagree",
-                  "a fit missing", f"median SIFT-{SECOND} gap % diag", "SIFT-lowc CPU ms"], rows), ""]
+                  "a fit missing", f"median SIFT-{SECOND} gap % diag",
+                  "median spread of similarity fits to the SIFT-lowc matches % diag",
+                  "SIFT-lowc CPU ms"], rows), "", *FITS_TEXT, ""]
     noref = [r for r in recs if r["ref"] is None]
     if noref:
         L += ["Pairs without a reference (not scored; seahough's answer shown with its distance "

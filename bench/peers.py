@@ -171,8 +171,8 @@ class FeatureLocator:
         return _ransac(self.pts, pts, _ratio_matches(self.matcher, self.des, des))
 
 
-def feature_pair(kind: str, prev, cur, _cache={}) -> PeerResult:
-    """SIFT/ORB + RANSAC motion, previous frame -> current frame."""
+def matched_points(kind: str, prev, cur, _cache={}):
+    """(points of prev, points of cur, ratio-test matches) of SIFT/ORB."""
     if kind not in _cache:
         _cache[kind] = _make(kind)
     det, matcher = _cache[kind]
@@ -180,7 +180,33 @@ def feature_pair(kind: str, prev, cur, _cache={}) -> PeerResult:
     kp2, d2 = det.detectAndCompute(grey(cur), None)
     p1 = np.array([k.pt for k in kp1], np.float32).reshape(-1, 2)
     p2 = np.array([k.pt for k in kp2], np.float32).reshape(-1, 2)
-    return _ransac(p1, p2, _ratio_matches(matcher, d1, d2))
+    return p1, p2, _ratio_matches(matcher, d1, d2)
+
+
+def feature_pair(kind: str, prev, cur) -> PeerResult:
+    """SIFT/ORB + RANSAC motion, previous frame -> current frame."""
+    return _ransac(*matched_points(kind, prev, cur))
+
+
+#: other robust similarity fits of the same matches (:func:`similarity_fits`):
+#: RANSAC with these reprojection thresholds (px) and least median of squares
+OTHER_FITS_PX = (1.0, 2.0, 5.0)
+
+
+def similarity_fits(pts_a, pts_b, good) -> list:
+    """The similarity of the same matches fitted by other robust criteria than
+    :func:`_ransac`'s (RANSAC at :data:`OTHER_FITS_PX` px, LMEDS): where the
+    motion is not a similarity (3-D relief, an oblique camera) each keeps
+    other points and lands elsewhere; their spread is how far "the"
+    similarity of the pair is defined."""
+    if len(good) < 3:
+        return []
+    src = np.float32([pts_a[m.queryIdx] for m in good]).reshape(-1, 1, 2)
+    dst = np.float32([pts_b[m.trainIdx] for m in good]).reshape(-1, 1, 2)
+    fits = [cv2.estimateAffinePartial2D(src, dst, method=cv2.RANSAC, ransacReprojThreshold=t)[0]
+            for t in OTHER_FITS_PX]
+    fits.append(cv2.estimateAffinePartial2D(src, dst, method=cv2.LMEDS)[0])
+    return [m.astype(float) for m in fits if m is not None]
 
 
 # --------------------------------------------------------------------------

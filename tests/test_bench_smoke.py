@@ -170,7 +170,11 @@ def test_real_pairs_benchmark_quick(tmp_path):
     measured = next(r for r in targets if r[0].startswith("dead reckoning: consecutive"))
     assert all(re.fullmatch(r"\S+ \d+/\d+", c.strip()) for c in measured[2].split(";"))
     spread = next(r for r in targets if r[0].startswith("dead reckoning: median step error"))
-    assert re.fullmatch(r"\S+ [\d.]+ / [\d.]+(; \S+ [\d.]+ / [\d.]+)*", spread[2]), spread
+    cell = r"\S+ [\d.]+ / [\d.]+ \(fits: [\d.]+\)"
+    assert re.fullmatch(rf"{cell}(; {cell})*", spread[2]), spread
+    # beside it the spread of robust similarity fits to the same SIFT-lowc matches
+    refs = _rows(_section(text, "## Reference motions"))
+    assert "median spread of similarity fits to the SIFT-lowc matches % diag" in refs[0]
     # issue 14's checks again on frames cropped by a pixel (a quick run: 1 px only)
     crop_row = next(r for r in targets if "cropped by 1 px" in r[0])
     assert re.fullmatch(r"\d+; \d+", crop_row[2]), crop_row
