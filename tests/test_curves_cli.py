@@ -68,4 +68,27 @@ def test_plot_curves_draws_borders_outside_the_rope():
     ys = sorted({round(float(np.mean(line.get_ydata())), 1) for line in ax.lines})
     assert ys == [54.0, 60.0, 66.0]     # borders at +-(3 + 3) px, the centre line
     fig = plot_curves(img, [])
-    assert any(t.get_text() == "not found" for t in fig.axes[0].texts)
+    [note] = [t for t in fig.axes[0].texts if t.get_text() == "not found"]
+    assert note.get_position() == (0.02, 0.98)            # a corner, not the middle
+    # a narrow image (155 px drawn pixel for pixel): its list broken into lines that fit
+    narrow = np.full((250, 155), 40, np.uint8)
+    fig = plot_curves(narrow, [c], max_width=0)
+    [box] = [a for a in fig.axes[0].artists]
+    bb = box.get_window_extent(fig.canvas.get_renderer())
+    assert bb.x0 >= 0 and bb.width < 200, bb
+
+
+def test_smooth_option_takes_the_speckle_off_a_sonar_image(capsys):
+    from conftest import data_path
+
+    img = str(data_path("sonar", "nksid_fls", "soft_pipeline_img_62.jpg"))
+    assert _cli(["detect", "curve:10", img, "--json", "-q"]) == 1
+    assert json.loads(capsys.readouterr().out)["detections"] == []
+    assert _cli(["detect", "curve:10", img, "--smooth", "3", "--json", "-q"]) == 0
+    assert len(json.loads(capsys.readouterr().out)["detections"]) == 1
+    assert _cli(["detect", "curve:10", img, "--smooth", "-1"]) == 2
+    err = capsys.readouterr().err
+    assert "--smooth" in err and "Traceback" not in err
+    # survey detect takes it too
+    from seahough.cli.survey import SEARCH_OPTIONS
+    assert "smooth" in SEARCH_OPTIONS

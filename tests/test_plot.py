@@ -614,7 +614,8 @@ def test_overlay_at_native_size_is_drawn_pixel_for_pixel(tmp_path):
     x0, y0, iw, ih = _image_area(fig)
     assert iw >= 1600 and ih >= 1200
     # every pixel of the photo is in the PNG: the checkerboard is intact, not a grey blur
-    patch = im[y0 + 20:y0 + 60, x0 + 20:x0 + 60, 0].astype(int)
+    # (a patch in the middle: "not found" is in a corner)
+    patch = im[y0 + ih // 2:y0 + ih // 2 + 40, x0 + iw // 2:x0 + iw // 2 + 40, 0].astype(int)
     assert np.abs(np.diff(patch, axis=1)).min() > 150, patch[:3, :6]
     # "native" is 0; by default the same photo is drawn 900 px wide (blurred)
     assert plot.detections_size(img.shape, max_width="native") == (1700, 1300)
@@ -623,7 +624,7 @@ def test_overlay_at_native_size_is_drawn_pixel_for_pixel(tmp_path):
     assert (im.shape[1], im.shape[0]) == plot.detections_size(img.shape) == (1000, 775)
     x0, y0, iw, ih = _image_area(fig)
     assert iw == 900
-    patch = im[y0 + 20:y0 + 60, x0 + 20:x0 + 60, 0].astype(int)
+    patch = im[y0 + ih // 2:y0 + ih // 2 + 40, x0 + iw // 2:x0 + iw // 2 + 40, 0].astype(int)
     assert np.abs(np.diff(patch, axis=1)).max() < 60
 
 
@@ -864,3 +865,18 @@ def test_edges_picture_is_in_full_resolution_pixels_at_a_working_scale(tmp_path)
     assert f"{g.factor:.2f}".rstrip("0") + "x" in ax2.get_title()
     assert f"{g.magnitude.shape[1]} x {g.magnitude.shape[0]} px" in ax1.get_title()
     assert f"{len(res.features.keypoints):,} key points" in ax2.get_title()
+
+
+def test_not_found_sits_in_a_corner_not_over_the_middle(tmp_path):
+    """The "not found" note is in the top left corner (the pattern inset in
+    the top right), so the middle of the picture, where a user looks for
+    the object, stays visible."""
+    img = _checkerboard(300, 400)
+    fig = plot.plot_detections(img, [], tmp_path / "nf.png", pattern=seahough.Pattern.circle(20))
+    ax = fig.axes[0]
+    [note] = [t for t in ax.texts if t.get_text() == "not found"]
+    x, y = note.get_position()
+    assert note.get_transform() == ax.transAxes and (x, y) == (0.02, 0.98)
+    bb = note.get_window_extent(fig.canvas.get_renderer())
+    area = ax.get_window_extent()
+    assert bb.x1 < area.x0 + 0.5 * area.width and bb.y0 > area.y0 + 0.7 * area.height

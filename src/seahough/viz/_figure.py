@@ -80,6 +80,23 @@ def _png_bytes(fig: Figure, path) -> np.ndarray:
     return buf
 
 
+def stack_figures(figs, path) -> None:
+    """Figures drawn one under the other in one PNG at ``path`` (white
+    where one is narrower than the widest): e.g. the accumulator of each
+    pattern of a search of several. A :class:`~seahough.errors.WriteError`
+    naming the file when it cannot be written."""
+    from ..io.images import write_image
+
+    parts = []
+    for fig in figs:
+        fig.canvas.draw()
+        parts.append(cv2.cvtColor(np.asarray(fig.canvas.buffer_rgba()), cv2.COLOR_RGBA2BGR))
+    width = max(a.shape[1] for a in parts)
+    rows = [cv2.copyMakeBorder(a, 0, 0, 0, width - a.shape[1], cv2.BORDER_CONSTANT,
+                               value=(255, 255, 255)) for a in parts]
+    write_image(path, np.vstack(rows), what="the figure")
+
+
 def _finish(fig: Figure, path) -> Figure:
     """Save ``fig`` at ``path`` (its folder made as needed; the format from
     the extension, PNG without one) unless ``path`` is None; return it.

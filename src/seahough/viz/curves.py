@@ -8,7 +8,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ._figure import COLOURS, _OUTLINE, _finish
-from .detections import _free_corners, _image_figure, _label_list, _place_label
+from .detections import (_LIST_PAD, _free_corners, _image_figure, _image_px, _label_list,
+                         _list_size, _place_label, _wrap_label)
 
 
 def _borders(points: np.ndarray, half: float) -> tuple[np.ndarray, np.ndarray]:
@@ -43,8 +44,9 @@ def plot_curves(image, curves, path=None, *, title=None, max_width=None,
         dashed lines 3 px outside the rope's borders (``width / 2 + 3`` px
         to either side of the centre line, which is drawn thin), so that the
         rope shows between them, numbered at its first point, and listed with its length,
-        width, score and NFA in the image corner farthest from them; "not
-        found" across the image when the list is empty.
+        width, score and NFA in the image corner farthest from them (lines
+        broken when the image is narrower); "not found" in its top left
+        corner when the list is empty.
     path : str or Path, optional
         Where to save the PNG.
     title : str, optional
@@ -67,7 +69,7 @@ def plot_curves(image, curves, path=None, *, title=None, max_width=None,
     >>> tuple(int(v) for v in fig.get_size_inches() * fig.dpi)
     (1000, 775)
     """
-    fig, ax, _, _, (w, h), _ = _image_figure(image, max_width, bit_depth)
+    fig, ax, _, _, (w, h), box = _image_figure(image, max_width, bit_depth)
     ax.set_xlabel("x (px)")
     ax.set_ylabel("y (px)")
     curves = list(curves or [])
@@ -85,10 +87,14 @@ def plot_curves(image, curves, path=None, *, title=None, max_width=None,
         items.append((f"#{i + 1}  " + _curve_label(c), col))
     if items:
         corner = _free_corners(np.vstack(anchors), w, h)[0]
+        # (lines wider than the drawn image: broken at their " · ", as in plot_detections)
+        dw = _image_px((w, h), box)[0]
+        if _list_size(fig, items)[0] > 0.96 * dw:
+            items = [(_wrap_label(fig, t, 0.94 * dw - _LIST_PAD), c) for t, c in items]
         _label_list(ax, items, corner)
-    else:
-        ax.text(0.5 * w, 0.5 * h, "not found", ha="center", va="center", color="white",
-                fontsize=20, fontweight="bold", path_effects=_OUTLINE)
+    else:   # (in a corner: the middle is where the rope was looked for)
+        ax.text(0.02, 0.98, "not found", transform=ax.transAxes, ha="left", va="top",
+                color="white", fontsize=20, fontweight="bold", path_effects=_OUTLINE)
     if title is None:
         n = len(curves)
         title = "no curve found" if n == 0 else f"{n} curve{'s' if n > 1 else ''}"

@@ -263,6 +263,10 @@ def _fits_beside_object(fig, text, w, h, box_w, box_h) -> bool:
     return tw + _LIST_PAD <= 0.96 * _image_px((w, h), (box_w, box_h))[0]
 
 
+#: font size of the "not found" note in an image corner (points, at most)
+_CORNER_NOTE = 20
+
+
 def _notes(fig, ax, detections, pattern, corners, wh, box_wh):
     """The detection list, the "not found" note and the pattern inset.
 
@@ -327,13 +331,20 @@ def _notes(fig, ax, detections, pattern, corners, wh, box_wh):
         _label_list(ax, items, corners[0])
         corners = corners[1:]
     elif n == 0:
-        size = nf_size
+        # in a corner (the second free one: the top left of an image without
+        # detections), not over the middle of the picture, where the object a
+        # user looks for usually is
+        size = _CORNER_NOTE
         while size > 10 and _text_size(fig, "not found", fontsize=size,
-                                       fontweight="bold")[0] + 30 > 0.9 * dw:
+                                       fontweight="bold")[0] + 30 > 0.45 * dw:
             size -= 2
-        ax.text(0.5, 0.5, "not found", transform=ax.transAxes, ha="center", va="center",
+        x, y, ha, va = {0: (0.02, 0.98, "left", "top"), 1: (0.98, 0.98, "right", "top"),
+                        2: (0.98, 0.02, "right", "bottom"),
+                        3: (0.02, 0.02, "left", "bottom")}[corners[1]]
+        ax.text(x, y, "not found", transform=ax.transAxes, ha=ha, va=va,
                 fontsize=size, fontweight="bold", color="white", path_effects=_TEXT_OUTLINE,
                 bbox=dict(boxstyle="round,pad=0.4", fc="#b00020", ec="white", alpha=0.8))
+        corners = [corners[0], *corners[2:]]     # (the pattern where it goes when found)
     if pattern is not None:
         _pattern_inset(ax, pattern, corners[0], (dw, dh))
 
