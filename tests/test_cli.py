@@ -315,9 +315,10 @@ def test_bit_depth_option_reads_twelve_bit_files(tmp_path):
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
-def test_the_accumulator_picture_of_several_patterns_is_the_found_ones(tmp_path, monkeypatch):
-    """With several patterns, the accumulator picture shows the planes of the
-    pattern of the best detection (not always the first pattern's)."""
+def test_the_accumulator_picture_of_several_patterns_shows_each_pattern(tmp_path, monkeypatch):
+    """With several patterns, the accumulator picture shows each pattern's
+    planes, one under the other, titled with its name (a trial found the
+    post planes left out of a buoy-and-post search)."""
     from seahough import viz
     from seahough.cli import detect as D
     from seahough.cli._common import make_detector
@@ -327,14 +328,21 @@ def test_the_accumulator_picture_of_several_patterns_is_the_found_ones(tmp_path,
                         0.0, None, None, False, None, None)
     res = det.search(img)
     assert [d.pattern for d in res.detections] == ["rope"]
-    seen = {}
-    monkeypatch.setattr(viz, "plot_accumulator",
-                        lambda planes, dets, path, title, note: seen.update(
-                            planes=planes, dets=dets, title=title))
-    D._pictures("rope.png", img, res, det, None, tmp_path / "rope", D.Drawing(), {})
-    # (SearchResult.planes too: the best detection's pattern's)
-    assert seen["planes"] is res.parts["rope"].planes and seen["planes"] is res.planes
-    assert seen["title"].endswith("of pattern rope") and len(seen["dets"]) == 1
+    seen = []
+    draw = viz.plot_accumulator
+    monkeypatch.setattr(viz, "plot_accumulator", lambda planes, dets, path, title, note:
+                        seen.append((planes, title)) or draw(planes, dets, path, title=title,
+                                                            note=note))
+    written = {}
+    D._pictures("rope.png", img, res, det, None, tmp_path / "rope",
+                D.Drawing(kinds=("accumulator",)), written)
+    assert [(p, t) for p, t in seen] == [
+        (res.parts["buoy"].planes, "rope.png: accumulator of pattern buoy"),
+        (res.parts["rope"].planes, "rope.png: accumulator of pattern rope")]
+    both = cv2.imread(written["accumulator"])
+    draw(res.parts["rope"].planes, res.detections, tmp_path / "one.png")
+    single = cv2.imread(str(tmp_path / "one.png"))
+    assert both.shape == (2 * single.shape[0], single.shape[1], 3)
 
 
 def test_each_of_several_patterns_takes_its_own_settings(tmp_path):
@@ -890,3 +898,73 @@ def test_odometry_says_when_the_first_frame_may_be_the_odd_one(tmp_path):
     proc = run("odometry", tmp_path, "--out", tmp_path / "out", "--no-mosaic", "-q")
     assert proc.returncode == 1
     assert "note: every frame after the first has another size than the first" in proc.stdout
+
+
+def test_not_found_shows_the_best_candidate_and_why(tmp_path):
+    """Nothing reported: the best candidate that was not is printed under the
+    image's line with its pose, score and reason (JSON: best_declined), so
+    that a user sees which setting stopped it; -q leaves the line out; a
+    found image has best_declined null."""
+    img = np.full((200, 260), 80, np.uint8)
+    cv2.rectangle(img, (70, 60), (190, 140), 170, -1)
+    cv2.imwrite(str(tmp_path / "r.png"), img)
+    proc = run("detect", "rect:120,80", tmp_path / "r.png", "--min-score", 0.99)
+    assert proc.returncode == 1, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert len(lines) == 2 and "not found" in lines[0]
+    assert lines[1].startswith("  best candidate, not reported: x "), lines[1]
+    assert "under min_score 0.99" in lines[1] or "the least that could win" in lines[1], lines[1]
+    rec = json.loads(run("detect", "rect:120,80", tmp_path / "r.png", "--min-score", 0.99,
+                         "--json").stdout)
+    best = rec["best_declined"]
+    assert rec["found"] is False and best["declined"] and 0 < best["score"] < 0.99
+    assert set(best) == {"pattern", "x", "y", "scale", "angle", "score", "nfa", "declined"}
+    quiet = run("detect", "rect:120,80", tmp_path / "r.png", "--min-score", 0.99, "-q")
+    assert len(quiet.stdout.splitlines()) == 1
+    found = json.loads(run("detect", "rect:120,80", tmp_path / "r.png", "--json").stdout)
+    assert found["found"] is True and found["best_declined"] is None
+    # several patterns: the line names the candidate's pattern
+    proc = run("detect", "a=rect:120,80@min-score=0.99+b=circle:30@min-score=0.99",
+               tmp_path / "r.png")
+    assert proc.returncode == 1
+    assert proc.stdout.splitlines()[1].startswith(("  best candidate, not reported: a: ",
+                                                   "  best candidate, not reported: b: "))
+
+
+def test_detect_takes_a_folder_for_its_images(tmp_path):
+    img = np.full((120, 160), 60, np.uint8)
+    cv2.rectangle(img, (50, 40), (110, 80), 200, -1)
+    (tmp_path / "dive").mkdir()
+    for name in ("f10.png", "f2.png"):
+        cv2.imwrite(str(tmp_path / "dive" / name), img)
+    (tmp_path / "dive" / "notes.txt").write_text("not an image")
+    proc = run("detect", "rect:60,40", tmp_path / "dive", "--json")
+    assert proc.returncode == 0, proc.stderr
+    files = [Path(json.loads(line)["file"]).name for line in proc.stdout.splitlines()]
+    assert files == ["f2.png", "f10.png"]
+    (tmp_path / "empty").mkdir()
+    proc = run("detect", "rect:60,40", tmp_path / "empty")
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert proc.stderr.strip().endswith("in this folder") and "empty" in proc.stderr
+
+
+def test_detect_reads_a_video_frame_by_frame(tmp_path):
+    """A video among the IMAGEs: each frame searched, named VIDEO#N, in
+    order (also with several workers), its pictures VIDEO-STEM_0000N."""
+    path = tmp_path / "dive.mp4"
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), 5, (320, 240))
+    for i in range(4):
+        f = np.full((240, 320, 3), 60, np.uint8)
+        cv2.rectangle(f, (100 + 10 * i, 80), (160 + 10 * i, 120), (200, 200, 200), -1)
+        writer.write(f)
+    writer.release()
+    for workers in (1, 2):
+        proc = run("detect", "rect:60,40", path, "--json", "-n", 1, "--workers", workers)
+        assert proc.returncode == 0, proc.stderr
+        recs = [json.loads(line) for line in proc.stdout.splitlines()]
+        assert [r["file"] for r in recs] == [f"{path}#{i}" for i in range(4)]
+        xs = [r["detections"][0]["x"] for r in recs]
+        assert np.allclose(np.diff(xs), 10.0, atol=1.0), xs
+    proc = run("detect", "rect:60,40", path, "--out", tmp_path / "pics", "--pictures", "overlay")
+    assert sorted(p.name for p in (tmp_path / "pics").iterdir()) == [
+        f"dive_{i:05d}_overlay.png" for i in range(4)]

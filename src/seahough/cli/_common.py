@@ -220,7 +220,7 @@ def bit_depth_option(f):
 
 def make_detector(pattern, scale_range, angle_range, max_results, min_score, min_confidence,
                   downscale, keypoints, equalize, polarity, mask, max_nfa=1.0, colour=None,
-                  bit_depth=None):
+                  bit_depth=None, smooth=None):
     """The Detector that the search options of ``seahough detect`` (also
     taken by ``survey detect``) describe; PATTERN as :func:`parse_pattern`.
 
@@ -243,6 +243,8 @@ def make_detector(pattern, scale_range, angle_range, max_results, min_score, min
         cfg_kw["colour"] = bool(colour)
     if bit_depth is not None:
         cfg_kw["bit_depth"] = int(bit_depth)
+    if smooth:
+        cfg_kw["smooth"] = float(smooth)
     config = Config(**cfg_kw)
     kind, sep, rest = pattern.partition(":")
     if sep and kind.strip().lower() == "curve" and not Path(pattern).is_file():

@@ -7,6 +7,7 @@ import inspect
 import io
 import json
 import math
+import os
 import time
 from collections import deque
 from contextlib import closing
@@ -20,7 +21,8 @@ from ..config import Config
 from ..core.detector import FLAG_ALONG_LINE, Detector
 from ..errors import SeahoughError
 from ..geometry import format_angle, format_line
-from ..io.frames import printable
+from ..io.frames import (IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, FrameReader, list_frames, printable,
+                         split_video_ref)
 from ._common import (CurveSearch, _Output, _dumps, _max_nfa_callback, _out_dir, _problem,
                       _progress, _range_callback, _table, bit_depth_option, default_workers,
                       make_detector, workers_option)
@@ -85,13 +87,54 @@ def _detection_lines(dets) -> list[str]:
     return _table(rows, header)
 
 
+def _expand_inputs(images) -> list[str]:
+    """IMAGE arguments with each folder replaced by its images, in name
+    order (not its subfolders), and each video by its frames
+    (``"dive.mp4#<k>"``; :func:`~seahough.io.frames.list_frames`)."""
+    out = []
+    for name in images:
+        suffix = Path(name).suffix.lower()
+        if (suffix in VIDEO_EXTENSIONS and os.path.isfile(name)) or (
+                suffix not in IMAGE_EXTENSIONS and os.path.isdir(name)):
+            out.extend(str(f) for f in list_frames(name))
+        else:
+            out.append(name)
+    return out
+
+
+def best_declined(res):
+    """The best-scoring candidate of a search that was not reported (not
+    merely a repeat of a better one), or None: what a user tunes by."""
+    cands = [c for c in getattr(res, "candidates", None) or ()
+             if c.declined and not c.declined.startswith("the same object")]
+    return max(cands, key=lambda c: c.score) if cands else None
+
+
+def _best_declined_dict(c) -> dict | None:
+    if c is None:
+        return None
+    q = c.pose
+    return {"pattern": c.pattern, "x": float(q.tx), "y": float(q.ty), "scale": float(q.scale),
+            "angle": float(q.angle), "score": float(c.score),
+            "nfa": float(c.nfa) if math.isfinite(c.nfa) else None, "declined": c.declined}
+
+
+def _best_declined_line(c) -> str:
+    q = c.pose
+    name = f"{c.pattern}: " if c.pattern else ""
+    return (f"  best candidate, not reported: {name}x {q.tx:.1f}, y {q.ty:.1f}, scale "
+            f"{q.scale:.3f}, angle {format_angle(q.angle, 1)}, score {c.score:.2f}, nfa "
+            f"{_nfa_text(c.nfa)}: {c.declined}")
+
+
 def _picture_stem(name: str, out_dir, stems: dict) -> str | None:
     """The pictures' file stem of image ``name`` (``<stem>_2`` for the second
     image of that stem, and so on, counted in ``stems``); None without
     ``--out``."""
     if out_dir is None:
         return None
-    stem = Path(name).stem
+    ref = split_video_ref(name)
+    stem = f"{Path(ref[0]).stem}_{ref[1]:05d}" if ref else Path(name).stem
     k = stems.get(stem, 0)
     stems[stem] = k + 1
     return f"{stem}_{k + 1}" if k else stem
@@ -122,19 +165,24 @@ def _max_width_callback(ctx, param, value):
 
 
 def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir,
-                draw=None):
+                draw=None, image=None):
     """Read and search one image, and write its pictures (``stem`` given):
     ``(result, (h, w), ms, written, failed)``, or the SeahoughError that
     stopped reading or searching it. ``failed``: the WriteError of a picture
     that could not be written (the result stands; the pictures after it are
-    not drawn). Runs in a worker thread: the kernels release the GIL, and the
-    pictures are drawn on their own Agg figures."""
+    not drawn). ``image``: the image already read (a video's frame, decoded in
+    order by :func:`_run_jobs`), or the SeahoughError of reading it. Runs in a
+    worker thread: the kernels release the GIL, and the pictures are drawn on
+    their own Agg figures."""
     from ..io.images import read_image
 
     cfg = detector.config
     t0 = time.perf_counter()
+    if isinstance(image, SeahoughError):
+        return image
     try:
-        img = read_image(name, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
+        img = image if image is not None else read_image(
+            name, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
         res = detector.search(img)
     except SeahoughError as e:
         return e
@@ -204,17 +252,25 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, draw: Dr
         plot.plot_detections(img, dets, ov, pattern=pat, title=head, max_width=max_width,
                              bit_depth=detector.config.bit_depth)
         written["overlay"] = str(ov)
-    planes, feats = res.planes, res.features
-    acc_dets, acc_title = dets, f"{Path(name).name}: accumulator"
-    if detector.parts:   # one pattern's planes and edges: the best detection's (else the first's)
+    feats = res.features
+    acc_title = f"{Path(name).name}: accumulator"
+    if detector.parts:   # the edges: the best detection's pattern's (else the first's)
         which = dets[0].pattern if dets else next(iter(detector.parts))
         part = res.parts.get(which) if res.parts else None
         if part is not None:
-            planes, feats = part.planes, part.features
-        acc_title += f" of pattern {which}"   # (its detections numbered in the whole list)
+            feats = part.features
     if "accumulator" in kinds:
         ac = Path(f"{base}_accumulator.png")
-        plot.plot_accumulator(planes, acc_dets, ac, title=acc_title, note=res.note)
+        if detector.parts and res.parts:
+            # each pattern's planes, one under the other (its detections numbered in
+            # the whole list)
+            from ..viz._figure import stack_figures
+
+            stack_figures([plot.plot_accumulator(r.planes, dets, None, note=r.note,
+                                                 title=f"{acc_title} of pattern {n}")
+                           for n, r in res.parts.items()], ac)
+        else:
+            plot.plot_accumulator(res.planes, dets, ac, title=acc_title, note=res.note)
         written["accumulator"] = str(ac)
     if "edges" in kinds:
         ed = Path(f"{base}_edges.png")
@@ -227,30 +283,47 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, draw=None):
     ``jobs``, in their order: one at a time with one worker, else ``workers``
     threads with at most twice as many images in flight (read, searched or
     done but not yet printed), so that memory stays bounded."""
-    if workers <= 1:
-        for name, stem in jobs:
-            yield name, _search_one(name, stem, detector, pat, out_dir, draw)
-        return
-    pool = ThreadPoolExecutor(workers, thread_name_prefix="seahough-detect")
-    pending: deque = deque()
-    todo = iter(jobs)
+    cfg = detector.config
+    videos = FrameReader([], cfg.max_pixels, cfg.max_memory_mb)
+
+    def decoded(name):
+        # a video's frame decoded here, in the order of the frames (the reader
+        # goes on from the last one); a file is read by its worker
+        if split_video_ref(name) is None:
+            return None
+        videos.items = [name]
+        try:
+            return videos.raw(0)
+        except SeahoughError as e:
+            return e
+
     try:
-        for name, stem in todo:
-            pending.append((name, pool.submit(_search_one, name, stem, detector, pat, out_dir,
-                                              draw)))
-            if len(pending) >= 2 * workers:
-                break
-        while pending:
-            name, fut = pending.popleft()
-            done = fut.result()
-            nxt = next(todo, None)
-            if nxt is not None:
-                pending.append((nxt[0], pool.submit(_search_one, *nxt, detector, pat, out_dir,
-                                                    draw)))
-            yield name, done
+        if workers <= 1:
+            for name, stem in jobs:
+                yield name, _search_one(name, stem, detector, pat, out_dir, draw, decoded(name))
+            return
+        pool = ThreadPoolExecutor(workers, thread_name_prefix="seahough-detect")
+        pending: deque = deque()
+        todo = iter(jobs)
+        try:
+            for name, stem in todo:
+                pending.append((name, pool.submit(_search_one, name, stem, detector, pat,
+                                                  out_dir, draw, decoded(name))))
+                if len(pending) >= 2 * workers:
+                    break
+            while pending:
+                name, fut = pending.popleft()
+                done = fut.result()
+                nxt = next(todo, None)
+                if nxt is not None:
+                    pending.append((nxt[0], pool.submit(_search_one, *nxt, detector, pat,
+                                                        out_dir, draw, decoded(nxt[0]))))
+                yield name, done
+        finally:
+            # (an error, Ctrl-C or a closed pipe: what has not started is dropped)
+            pool.shutdown(wait=True, cancel_futures=True)
     finally:
-        # (an error, Ctrl-C or a closed pipe: what has not started is dropped)
-        pool.shutdown(wait=True, cancel_futures=True)
+        videos.close()
 
 
 @click.command(no_args_is_help=True)
@@ -286,6 +359,10 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, draw=None):
               "without it, a pattern cut from a photo that is a small share of the image, a "
               "seabed patch, gets as many more as put enough on its area: slower).")
 @click.option("--equalize", is_flag=True, help="Local contrast equalisation (haze, uneven light).")
+@click.option("--smooth", type=click.FloatRange(0.0, 100.0), default=None, metavar="SIGMA",
+              help="Blur each image by this Gaussian sigma (px) before its edges are found: "
+              "speckle of sonar images, grain, marine snow (an image pattern gets it too). "
+              "Default: none.")
 @bit_depth_option
 @click.option("--colour/--grey", "colour", default=None,
               help="Edges from every colour channel of a colour image (an object that differs "
@@ -294,7 +371,8 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, draw=None):
                    "a green marker; grey otherwise).")
 @click.option("--polarity", type=click.Choice(["same", "inverted", "either", "bright", "dark"]),
               default=None, help="Contrast of the object: as in the pattern image (same; for "
-              "shapes: bright on dark), inverted (dark), or either.")
+              "shapes: bright on dark; bright is the same), inverted (dark on bright; dark is "
+              "the same), or either.")
 @click.option("--mask", type=click.Path(dir_okay=False), default=None,
               help="Image pattern only: mask of the object's pixels (non-zero).")
 @click.option("--json", "as_json", is_flag=True,
@@ -304,8 +382,8 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, draw=None):
               "none: one row, found false); lists (flags, matrix, points) as JSON text.")
 @click.option("--out", "-o", type=click.Path(file_okay=False), default=None,
               help="Write pictures per image here: <stem>_overlay.png (detections), "
-              "<stem>_accumulator.png (the vote planes) and <stem>_edges.png (gradients, key "
-              "points and segments).")
+              "<stem>_accumulator.png (the vote planes; each pattern's when several) and "
+              "<stem>_edges.png (gradients, key points and segments).")
 @click.option("--max-width", type=str, default=None, metavar="PX|native",
               callback=_max_width_callback,
               help="With --out: draw each photo at most PX px wide on its overlay (a wider "
@@ -318,7 +396,8 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, draw=None):
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar or notes; results only.")
 @workers_option("Images searched at once, in threads; results are printed in the order given")
 def detect(pattern, images, scale_range, angle_range, max_results, min_score, min_confidence,
-           max_nfa, downscale, keypoints, equalize, bit_depth, colour, polarity, mask, as_json,
+           max_nfa, downscale, keypoints, equalize, smooth, bit_depth, colour, polarity, mask,
+           as_json,
            as_csv, out, max_width, pictures, quiet, workers):
     """Find PATTERN in each IMAGE.
 
@@ -332,7 +411,8 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
       polyline:WIDTH:x1,y1,x2,y2,...  open strips WIDTH wide along the
                          points, e.g. a gate: polyline:6:0,100,0,0,210,0,210,100
       curve:WIDTH        a rope or cable that bends, WIDTH px wide: each
-                         found as the polyline of its centre line
+                         found as the polyline of its centre line (searched
+                         alone: not one of several patterns)
     Several patterns at once: NAME=SPEC+NAME=SPEC... (e.g.
     "buoy=circle:16+post=line:120,12"); each detection names its pattern,
     the strongest evidence (lowest nfa) first; -n is per pattern. A
@@ -347,7 +427,10 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     counter-clockwise as displayed, in [0, 360) (lines: [0, 180)). When the
     search could not run, the line says why, e.g. "not found (no edges)" or
     "not found (pattern larger than the image)"; the JSON "note" field holds
-    the same ("" when the search ran). "nfa" is a detection's number of
+    the same ("" when the search ran). When nothing is reported, the best
+    candidate that was not is printed below, with why (e.g. "score 0.34
+    under min_score 0.5", "NFA 3.2 over max_nfa 1"): the setting it would
+    take (JSON "best_declined"; -q leaves it out of the table). "nfa" is a detection's number of
     false alarms: how many detections this good chance alone would give in
     an image without the object (1e-5: one in 100,000 such images); only
     those of at most --max-nfa are reported. A progress bar is shown on
@@ -366,12 +449,17 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     problem gets one line on stderr).
 
     \b
+    An IMAGE that is a folder stands for its images, in name order (not
+    its subfolders), and a video for its frames, each named VIDEO#N (N
+    from 0) in the results and VIDEO-STEM_0000N in the pictures.
+
+    \b
     Example:
       seahough detect marker.png dive/*.jpg --scale-range 0.5 2 --json
     """
     detector = make_detector(pattern, scale_range, angle_range, max_results, min_score,
                              min_confidence, downscale, keypoints, equalize, polarity, mask,
-                             max_nfa=max_nfa, colour=colour, bit_depth=bit_depth)
+                             max_nfa=max_nfa, colour=colour, bit_depth=bit_depth, smooth=smooth)
     if max_width is not None and out is None:
         raise click.UsageError("--max-width sizes the pictures of --out: give --out DIR")
     if pictures != PICTURES and out is None:
@@ -383,6 +471,7 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     if isinstance(detector, CurveSearch) and out is not None and "overlay" not in pictures:
         raise click.UsageError("--pictures: curves have the overlay only")
     pat = None if detector.parts else detector.pattern   # (the inset: one pattern only)
+    images = _expand_inputs(images)
     out_dir = _out_dir(out) if out is not None else None
     workers = min(workers or default_workers(), len(images))
     bar = _progress(None, len(images), "detect", len(images) > 1 and not quiet)
@@ -462,6 +551,7 @@ def _report(outcomes, bar, say, form: str, quiet: bool) -> tuple[int, int]:
         if form == "json":
             rec = {"file": name, "width": int(w), "height": int(h), "found": bool(dets),
                    "note": res.note, "detections": [d.to_dict() for d in dets],
+                   "best_declined": None if dets else _best_declined_dict(best_declined(res)),
                    "time_ms": round(ms, 3)}
             rec.update(written)
             if failed is not None:
@@ -475,6 +565,9 @@ def _report(outcomes, bar, say, form: str, quiet: bool) -> tuple[int, int]:
                     say(line)
             else:
                 say(f"{printable(name)}  {w}x{h}  not found{why}  ({ms:.0f} ms)")
+                near = best_declined(res)
+                if near is not None and not quiet:
+                    say(printable(_best_declined_line(near)))
             if written and not quiet:
                 say("  wrote " + ", ".join(printable(v) for v in written.values()))
         if failed is not None:
