@@ -946,6 +946,14 @@ def test_detect_takes_a_folder_for_its_images(tmp_path):
     proc = run("detect", "rect:60,40", tmp_path / "empty")
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert proc.stderr.strip().endswith("in this folder") and "empty" in proc.stderr
+    # a folder or video that cannot be listed: its problem line, the others' results
+    (tmp_path / "broken.mp4").write_bytes(b"not a video")
+    proc = run("detect", "rect:60,40", tmp_path / "empty", tmp_path / "broken.mp4",
+               tmp_path / "dive" / "f2.png")
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert [line.split(": ")[2] for line in proc.stderr.splitlines()] == [
+        str(tmp_path / "empty"), str(tmp_path / "broken.mp4")]
+    assert proc.stdout.startswith(str(tmp_path / "dive" / "f2.png") + "  160x120  1 found")
 
 
 def test_detect_reads_a_video_frame_by_frame(tmp_path):

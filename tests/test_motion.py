@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import cv2
 import numpy as np
 import pytest
 
@@ -320,3 +321,23 @@ def test_screening_a_frames_rivals_keeps_the_answer_and_its_confidence(monkeypat
     np.testing.assert_allclose(screened.matrix, full.matrix, atol=1e-9)
     assert abs(screened.confidence - full.confidence) < 0.04
     assert n_screened < share * len(calls)
+
+
+def test_photo_motion_does_not_prepare_its_frames(monkeypatch):
+    """A frame matched to the next (estimate_motion, its coarse vote) is not
+    filled at a blank border nor smoothed as a searched image is: both
+    frames as they come (a review found the current frame alone prepared,
+    and Config(smooth=4) made two identical frames unmeasurable)."""
+    from seahough.config import MOTION_CONFIG
+    from seahough.core import detector as D
+
+    def refuse(*a, **k):
+        raise AssertionError("photo motion went through prepare_image")
+
+    monkeypatch.setattr(D, "prepare_image", refuse)
+    rng = np.random.default_rng(4)
+    a = cv2.GaussianBlur(rng.uniform(0, 255, (240, 320)).astype(np.float32), (0, 0), 2)
+    a = np.clip(128 + 3 * (a - a.mean()), 0, 255).astype(np.uint8)
+    a[:, :6] = 0                                    # a letterbox bar
+    m = seahough.estimate_motion(a, a, config=MOTION_CONFIG.replace(smooth=4.0))
+    assert m is not None and abs(m.dx) < 0.5 and abs(m.dy) < 0.5

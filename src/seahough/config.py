@@ -214,6 +214,7 @@ class Config:
         edges of its own. 0 (the default): none. A pattern cut from such an
         image (:meth:`Pattern.from_image`) gets it too, on top of
         ``pattern_blur`` (their root sum of squares: :attr:`photo_blur`).
+        Photo motion (a frame matched to the next) does not use it.
     segment_steps : int
         How many pixels a segment is traced along the edge on each side of
         its key point.
@@ -368,19 +369,24 @@ class Config:
 def config_record(config: Config) -> dict:
     """``config`` as plain values for a run's settings (what resuming a run
     compares). Fields added after runs were made are left out while unset
-    or at their default (``bit_depth`` None, ``search.hole_support`` 0.4), so
+    or at their default (``bit_depth`` None, ``search.hole_support`` 0.4,
+    ``smooth`` 0), so
     that those runs can still be continued.
 
     >>> "bit_depth" in config_record(Config()), config_record(Config(bit_depth=12))["bit_depth"]
     (False, 12)
     >>> "hole_support" in config_record(Config())["search"]
     False
+    >>> "smooth" in config_record(Config()), config_record(Config(smooth=2))["smooth"]
+    (False, 2.0)
     """
     rec = dataclasses.asdict(config)
     if rec.get("bit_depth") in (None, 16):    # (16 bits: read as unset)
         rec.pop("bit_depth", None)
     if rec["search"].get("hole_support") == SearchTuning.hole_support:
         rec["search"].pop("hole_support")
+    if rec.get("smooth") == 0.0:
+        rec.pop("smooth")
     return rec
 
 

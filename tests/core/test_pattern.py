@@ -269,3 +269,20 @@ def test_polyline_features_lie_on_its_strips_borders():
         assert max(off) <= 0.75, max(off)
         # both posts and the bar hold points
         assert (px < 20).sum() > 10 and (px > 60).sum() > 10 and ((py < 20) & (np.abs(px - 39) < 20)).sum() > 5
+
+
+def test_long_borders_are_judged_again_when_the_blur_changes():
+    """Pattern.has_long_borders depends on the blur of a photo pattern
+    (Config.photo_blur: pattern_blur and smooth): a pattern asked once must
+    not keep the answer of the other blur (its cache was keyed without it)."""
+    import cv2
+
+    rng = np.random.default_rng(3)
+    crop = cv2.GaussianBlur(rng.uniform(0, 255, (80, 80)).astype(np.float32), (0, 0), 1.2)
+    crop[:, :6] = 0                                   # a bar's edge along one side
+    crop = np.clip(crop, 0, 255).astype(np.uint8)
+    answers = {s: Pattern.from_image(crop).has_long_borders(Config(smooth=s)) for s in (0.0, 4.0)}
+    assert answers == {0.0: False, 4.0: True}
+    p = Pattern.from_image(crop)
+    assert [p.has_long_borders(Config(smooth=s)) for s in (0.0, 4.0)] == [answers[0.0],
+                                                                         answers[4.0]]

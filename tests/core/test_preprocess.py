@@ -308,3 +308,18 @@ def test_a_drawn_scene_s_flat_background_is_no_border():
     img[12:50, 30:90] = 200                       # 12 rows from the top
     assert blank_border(img) == (0, 0, 160, 120)
     assert fill_blank_border(img) is img
+
+
+def test_a_large_object_on_a_flat_ground_and_open_water_are_no_border():
+    """Flat lines at an edge that are the scene's own: a drawn object wider
+    than half the image (its edges in the outer quarter) on a flat ground
+    (a review found all four of its edges filled away), and the flat open
+    water at the top of a pool photo, fading downwards, broken by a board's
+    top edge (a RoboSub photo: 41 rows of it were taken for a band)."""
+    img = np.full((120, 160), 60, np.float32)
+    img[12:100, 20:150] = 200
+    assert blank_border(img) == (0, 0, 160, 120)
+    water = np.repeat(np.linspace(168, 20, 240, dtype=np.float32)[:, None], 320, axis=1)
+    water[40:80, 200:260] = 90                      # a board near the top
+    water[120:] += np.random.default_rng(2).uniform(-20, 20, (120, 320)).astype(np.float32)
+    assert blank_border(water)[1] == 0

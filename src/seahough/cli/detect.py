@@ -87,19 +87,24 @@ def _detection_lines(dets) -> list[str]:
     return _table(rows, header)
 
 
-def _expand_inputs(images) -> list[str]:
+def _expand_inputs(images) -> tuple[list[str], dict]:
     """IMAGE arguments with each folder replaced by its images, in name
     order (not its subfolders), and each video by its frames
-    (``"dive.mp4#<k>"``; :func:`~seahough.io.frames.list_frames`)."""
-    out = []
+    (``"dive.mp4#<k>"``; :func:`~seahough.io.frames.list_frames`); and the
+    SeahoughError of each folder or video that could not be listed, by name
+    (it stays in the list: one problem line, the run goes on)."""
+    out, bad = [], {}
     for name in images:
         suffix = Path(name).suffix.lower()
         if (suffix in VIDEO_EXTENSIONS and os.path.isfile(name)) or (
                 suffix not in IMAGE_EXTENSIONS and os.path.isdir(name)):
-            out.extend(str(f) for f in list_frames(name))
-        else:
-            out.append(name)
-    return out
+            try:
+                out.extend(str(f) for f in list_frames(name))
+                continue
+            except SeahoughError as e:
+                bad[name] = e
+        out.append(name)
+    return out, bad
 
 
 def best_declined(res):
@@ -107,7 +112,9 @@ def best_declined(res):
     merely a repeat of a better one), or None: what a user tunes by."""
     cands = [c for c in getattr(res, "candidates", None) or ()
              if c.declined and not c.declined.startswith("the same object")]
-    return max(cands, key=lambda c: c.score) if cands else None
+    # (a candidate finished at full resolution before one cut at the coarse scale:
+    # their scores are not measured alike)
+    return max(cands, key=lambda c: (c.full is not None, c.score)) if cands else None
 
 
 def _best_declined_dict(c) -> dict | None:
@@ -122,9 +129,10 @@ def _best_declined_dict(c) -> dict | None:
 def _best_declined_line(c) -> str:
     q = c.pose
     name = f"{c.pattern}: " if c.pattern else ""
+    nfa = f", nfa {_nfa_text(c.nfa)}" if math.isfinite(c.nfa) else ""
     return (f"  best candidate, not reported: {name}x {q.tx:.1f}, y {q.ty:.1f}, scale "
-            f"{q.scale:.3f}, angle {format_angle(q.angle, 1)}, score {c.score:.2f}, nfa "
-            f"{_nfa_text(c.nfa)}: {c.declined}")
+            f"{q.scale:.3f}, angle {format_angle(q.angle, 1)}, score {c.score:.2f}{nfa}: "
+            f"{c.declined}")
 
 
 def _picture_stem(name: str, out_dir, stems: dict) -> str | None:
@@ -278,17 +286,21 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, draw: Dr
         written["edges"] = str(ed)
 
 
-def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, draw=None):
+def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, draw=None, bad=None):
     """``(name, outcome of _search_one)`` for each ``(name, stem)`` of
     ``jobs``, in their order: one at a time with one worker, else ``workers``
     threads with at most twice as many images in flight (read, searched or
-    done but not yet printed), so that memory stays bounded."""
+    done but not yet printed), so that memory stays bounded. ``bad``: the
+    error of each input that could not be listed, reported as its outcome."""
     cfg = detector.config
+    bad = bad or {}
     videos = FrameReader([], cfg.max_pixels, cfg.max_memory_mb)
 
     def decoded(name):
         # a video's frame decoded here, in the order of the frames (the reader
         # goes on from the last one); a file is read by its worker
+        if name in bad:
+            return bad[name]
         if split_video_ref(name) is None:
             return None
         videos.items = [name]
@@ -449,9 +461,10 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     problem gets one line on stderr).
 
     \b
-    An IMAGE that is a folder stands for its images, in name order (not
-    its subfolders), and a video for its frames, each named VIDEO#N (N
-    from 0) in the results and VIDEO-STEM_0000N in the pictures.
+    An IMAGE that is a folder stands for its images, in name order (by
+    the time in their names when each has one; not its subfolders), and a
+    video for its frames, each named VIDEO#N (N from 0) in the results and
+    VIDEO-STEM_0000N in the pictures.
 
     \b
     Example:
@@ -471,7 +484,7 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     if isinstance(detector, CurveSearch) and out is not None and "overlay" not in pictures:
         raise click.UsageError("--pictures: curves have the overlay only")
     pat = None if detector.parts else detector.pattern   # (the inset: one pattern only)
-    images = _expand_inputs(images)
+    images, unlisted = _expand_inputs(images)
     out_dir = _out_dir(out) if out is not None else None
     workers = min(workers or default_workers(), len(images))
     bar = _progress(None, len(images), "detect", len(images) > 1 and not quiet)
@@ -479,7 +492,7 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     stems: dict[str, int] = {}
     jobs = [(name, _picture_stem(name, out_dir, stems)) for name in images]
     with closing(_run_jobs(jobs, detector, pat, out_dir, workers,
-                           Drawing(max_width, pictures))) as outcomes:
+                           Drawing(max_width, pictures), unlisted)) as outcomes:
         n_bad, n_missing = _report(outcomes, bar, say, "json" if as_json else
                                    "csv" if as_csv else "table", quiet)
     if bar is not None:

@@ -25,7 +25,7 @@ from .accumulator import (AccumulatorPlanes, accumulate, check_ranges, edge_gap,
 from .candidates import PoseComparison, SearchContext, find_candidates
 from .features import Features, extract_features
 from .pattern import Pattern
-from .preprocess import choose_factor, prepare_image
+from .preprocess import blank_border, choose_factor, prepare_image
 from .ranking import (FLAG_ALONG_LINE, FLAG_AMBIGUOUS, FLAG_OUTSIDE_RANGE, FLAG_PARTIAL,
                       FLAG_RANGE_EDGE, Detection, confidence, line_parameters, rank)
 
@@ -222,7 +222,9 @@ class Detector:
             return self._search_parts(image, features, t0)
         gray = to_image(image, cfg.colour, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb,
                         bit_depth=cfg.bit_depth)
-        if features is None:        # (given features: the caller prepared the image)
+        if features is None and not self.pattern.is_frame:
+            # (given features: the caller prepared the image; a frame pattern, in
+            # photo motion, is matched to the next frame as both come)
             gray = prepare_image(gray, cfg)
         if self._grey is not None and gray.ndim == 2:
             return self._grey._search_in_grey(gray, features, t0)
@@ -379,7 +381,9 @@ class Detector:
                               max_memory_mb=cfg.max_memory_mb, bit_depth=cfg.bit_depth)
                   for c in kinds}
         if features is None:
-            images = {c: prepare_image(img, cfg) for c, img in images.items()}
+            # (one border for the grey and the colour copy: the grey one's)
+            box = blank_border(images[min(images)])
+            images = {c: prepare_image(img, cfg, box) for c, img in images.items()}
         # each pattern, and the image it is searched in (a grey image has no colour
         # to see: a painted pattern's grey edges then, as searched alone)
         work = {}

@@ -418,7 +418,8 @@ class Pattern:
         config = config or Config()
         if not self.is_photo:
             return not self.is_frame
-        key = ("long borders", config.chain_length, config.min_gradient, self.in_colour(config))
+        key = ("long borders", config.chain_length, config.min_gradient, self.in_colour(config),
+               config.photo_blur, config.equalize)
         if key not in self._cache:
             img = np.ascontiguousarray(self._edges_from(config), np.float32)
             if config.photo_blur > 0:   # (as its features see it: a crisp staircase is not)

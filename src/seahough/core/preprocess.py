@@ -86,10 +86,17 @@ BLANK_STD = 2.0
 #: at most this share of each side is taken for a blank border (a side
 #: flat farther in: no border, the picture's own flat background)
 BLANK_DEPTH = 0.25
-#: ... and only when the picture next to it lies this many levels (median of
-#: its line) from the band's: a drawn scene's flat background, level with
-#: the picture's, is no border (an object near its edge stays as it is)
+#: ... and only when the picture beyond it departs from the band's level by
+#: this many levels (within that quarter) all along the side, at least at
+#: this share of its length: a drawn scene's flat background, level with
+#: the band beside an object, is no border (the object stays as it is).
+#: The RoboSub bars: 100 % (their picture departs within 1-3 px mostly).
 BLANK_STEP = 10.0
+BLANK_ALONG = 0.98
+#: ... and this share of it within the first lines beyond the band (a bar's
+#: edge is a step; the flat open water at the top of a pool photo fades,
+#: and its objects break it over a fifth of the width)
+BLANK_STEP_SHARE = 0.75
 #: lines beyond a blank border left out too: the JPEG-smeared line between
 #: bar and content (RoboSub: a column at 43 between 0 and 82)
 BLANK_MARGIN = 2
@@ -97,8 +104,8 @@ BLANK_MARGIN = 2
 
 def blank_border(gray: np.ndarray) -> tuple[int, int, int, int]:
     """(x0, y0, x1, y1), end exclusive: the image without its blank border
-    (flat lines at an edge: letterbox bars, a uniform band, whose level
-    differs from the picture's next to them by :data:`BLANK_STEP`) and
+    (flat lines at an edge: letterbox bars, a uniform band, beyond which the
+    picture departs from their level all along the side, :data:`BLANK_STEP`) and
     :data:`BLANK_MARGIN` lines more on each side that has one; the whole
     image when it has none, or when they would leave less than half of it.
 
@@ -126,9 +133,14 @@ def blank_border(gray: np.ndarray) -> tuple[int, int, int, int]:
         if flat.all():                # a quarter of the side flat: a scene's background
             return 0
         n = int(np.argmin(flat))
-        inside = lines[min(n + BLANK_MARGIN, lines.shape[0] - 1)]
-        if abs(float(np.median(inside)) - float(lines[n - 1].mean())) < BLANK_STEP:
-            return 0                  # the picture goes on at the band's level: its background
+        # a bar runs the whole side: beyond it, the picture departs from the band's
+        # level all along (a drawn scene's flat background, level with the band, does
+        # not where it passes beside an object)
+        off = np.abs(lines[n:] - float(lines[n - 1].mean())) >= BLANK_STEP
+        # ... and at once: a bar's edge is a step, open water fades from its level
+        if (off.any(axis=0).mean() < BLANK_ALONG
+                or off[:BLANK_MARGIN + 2].any(axis=0).mean() < BLANK_STEP_SHARE):
+            return 0
         return n + BLANK_MARGIN
 
     ly, lx = int(h * BLANK_DEPTH), int(w * BLANK_DEPTH)
@@ -143,12 +155,13 @@ def blank_border(gray: np.ndarray) -> tuple[int, int, int, int]:
     return box
 
 
-def fill_blank_border(image: np.ndarray) -> np.ndarray:
+def fill_blank_border(image: np.ndarray, box=None) -> np.ndarray:
     """``image`` with its :func:`blank_border` replaced by its content's
     outermost lines repeated outwards, so that the step between a letterbox
     bar and the picture is no edge (a post, a line, a rope along the frame
     on every video frame); the same array when it has none. Positions are
-    unchanged.
+    unchanged. ``box``: that border, already found (the grey and colour
+    copies of one image filled alike).
 
     Examples
     --------
@@ -159,23 +172,24 @@ def fill_blank_border(image: np.ndarray) -> np.ndarray:
     (True, (60, 80))
     """
     h, w = image.shape[:2]
-    x0, y0, x1, y1 = blank_border(image)
+    x0, y0, x1, y1 = blank_border(image) if box is None else box
     if (x0, y0, x1, y1) == (0, 0, w, h):
         return image
     return cv2.copyMakeBorder(image[y0:y1, x0:x1], y0, h - y1, x0, w - x1, cv2.BORDER_REPLICATE)
 
 
-def prepare_image(image: np.ndarray, config: Config) -> np.ndarray:
+def prepare_image(image: np.ndarray, config: Config, box=None) -> np.ndarray:
     """A searched image as the search sees it: its blank border filled
-    (:func:`fill_blank_border`) and, with ``Config.smooth``, blurred by that
-    Gaussian sigma (speckle, grain). Positions are unchanged.
+    (:func:`fill_blank_border`; ``box``: that border already found) and,
+    with ``Config.smooth``, blurred by that Gaussian sigma (speckle, grain).
+    Positions are unchanged.
 
     >>> img = np.zeros((40, 60), np.float32); img[:, 30:] = 200
     >>> out = prepare_image(img, Config(smooth=2.0))
     >>> float(out[20, 29]) > 0 and float(out[20, 30]) < 200
     True
     """
-    image = fill_blank_border(image)
+    image = fill_blank_border(image, box)
     if config.smooth > 0:
         image = cv2.GaussianBlur(np.ascontiguousarray(image, np.float32), (0, 0), config.smooth,
                                  borderType=cv2.BORDER_REPLICATE)
