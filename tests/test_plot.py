@@ -880,3 +880,25 @@ def test_not_found_sits_in_a_corner_not_over_the_middle(tmp_path):
     bb = note.get_window_extent(fig.canvas.get_renderer())
     area = ax.get_window_extent()
     assert bb.x1 < area.x0 + 0.5 * area.width and bb.y0 > area.y0 + 0.7 * area.height
+
+
+def test_outlines_drawn_small_are_thin_lines_and_thin_strips_their_centre_line():
+    """An outline drawn large: closed, thick; drawn small (a small disc): closed,
+    thin; a long strip a few px wide (a gate's post at a small scale): its
+    centre line, thin (its two thick borders made one solid bar over it)."""
+    from seahough.viz.detections import _OUTLINE, _THIN_OUTLINE, _outline_style
+
+    big = np.array([[0, 0], [60, 0], [60, 40], [0, 40]], float)
+    pts, lw, fx = _outline_style(big, 2.0)
+    assert len(pts) == 5 and lw == 2.2 and fx is _OUTLINE
+    small = 0.1 * big
+    pts, lw, fx = _outline_style(small, 2.0)
+    assert len(pts) == 5 and lw < 2.2 and fx is _THIN_OUTLINE
+    # a strip 3 px wide and 80 long, turned by 30 degrees
+    t = np.radians(30.0)
+    rot = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
+    strip = np.array([[0, -1.5], [80, -1.5], [80, 1.5], [0, 1.5]]) @ rot.T + [100, 50]
+    pts, lw, fx = _outline_style(strip, 2.0)
+    assert len(pts) == 2 and fx is _THIN_OUTLINE
+    ends = sorted(map(tuple, np.round(pts, 3)))
+    assert np.allclose(ends, sorted(map(tuple, np.round([[100, 50], rot @ [80, 0] + [100, 50]], 3))))

@@ -8,6 +8,7 @@ import math
 
 import cv2
 import numpy as np
+from matplotlib import patheffects
 from matplotlib.figure import Figure
 from matplotlib.offsetbox import AnchoredOffsetbox, TextArea, VPacker
 
@@ -180,6 +181,35 @@ def _place_label(ax, text, x, y, colour, w, h):
     ax.annotate(text, (xs, ys), xytext=(0, -dy), textcoords="offset points", ha=ha, va=va,
                 color=colour, fontsize=10, fontweight="bold", annotation_clip=False,
                 bbox=dict(boxstyle="round,pad=0.25", fc="black", ec=colour, alpha=0.72, lw=1))
+
+
+#: an outline drawn smaller than this (display px across its narrowest
+#: strip or side, see :func:`_outline_style`) gets thin lines
+_THIN_BELOW = 12.0
+_THIN_OUTLINE = [patheffects.Stroke(linewidth=2.4, foreground="black", alpha=0.6),
+                 patheffects.Normal()]
+
+
+def _outline_style(outline, px_per_px: float):
+    """(points, line width, path effects) of one polyline of a detection's
+    outline as drawn: closed, with the usual thick line and its black
+    border; or, drawn narrower than :data:`_THIN_BELOW` px (a small disc, a
+    gate's strips a few px wide), which that line would cover, a thin line;
+    and a long thin strip as its centre line alone (its two borders would
+    be one solid bar over it)."""
+    o = np.asarray(outline, float).reshape(-1, 2)
+    if len(o) < 3:
+        return o, 2.2, _OUTLINE
+    (cx, cy), (rw, rh), ang = cv2.minAreaRect(o.astype(np.float32))
+    closed = np.vstack([o, o[:1]])
+    narrow, long = sorted((rw, rh))
+    if narrow * px_per_px >= _THIN_BELOW:
+        return closed, 2.2, _OUTLINE
+    if long < 3.0 * max(narrow, 1e-9):
+        return closed, 1.2, _THIN_OUTLINE
+    t = np.radians(ang + (0.0 if rw >= rh else 90.0))
+    half = 0.5 * long * np.array([np.cos(t), np.sin(t)])
+    return np.array([[cx, cy] - half, [cx, cy] + half]), 1.2, _THIN_OUTLINE
 
 
 def _free_corners(points, w, h) -> list:
@@ -502,10 +532,8 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
             seg = _draw_line(ax, d, c, gray, w, h)
         else:
             for o in d.outline:
-                o = np.asarray(o, float).reshape(-1, 2)
-                if len(o) > 2:
-                    o = np.vstack([o, o[:1]])
-                ax.plot(o[:, 0], o[:, 1], color=c, lw=2.2, path_effects=_OUTLINE)
+                o, lw, effects = _outline_style(o, iw / w)
+                ax.plot(o[:, 0], o[:, 1], color=c, lw=lw, path_effects=effects)
         ax.plot([d.x], [d.y], marker="+", ms=_cross_size(ax, d, is_line, (w, h), (iw, ih)),
                 mew=2.5, color=c, path_effects=_OUTLINE)
         if seg is not None:                 # its label on the segment, nearest the centre
