@@ -442,11 +442,12 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     the same ("" when the search ran). When nothing is reported, the best
     candidate that was not is printed below, with why (e.g. "score 0.34
     under min_score 0.5", "NFA 3.2 over max_nfa 1"): the setting it would
-    take (JSON "best_declined"; -q leaves it out of the table). "nfa" is a detection's number of
-    false alarms: how many detections this good chance alone would give in
-    an image without the object (1e-5: one in 100,000 such images); only
-    those of at most --max-nfa are reported. A progress bar is shown on
-    stderr for several images when stderr is a terminal.
+    take (JSON "best_declined"; -q leaves it out of the table). "nfa" is
+    a detection's number of false alarms: how many detections this good
+    chance alone would give in an image without the object (1e-5: one in
+    100,000 such images); only those of at most --max-nfa are reported. A
+    progress bar is shown on stderr for several images when stderr is a
+    terminal.
 
     \b
     Images are searched --workers at a time (default: all cores), each
