@@ -416,3 +416,42 @@ def test_letterbox_bars_of_real_pool_video_are_no_gate_posts():
         for d in det.detect(img):
             assert 15 < d.x < w - 15, (n, d.x, d.y, d.nfa)
 
+
+
+def _buoy_box(n, label="buoy_green"):
+    import re
+
+    xml = data_path("objects", "robosub_transdec", "annotations", f"{n}.xml").read_text()
+    for obj in re.findall(r"<object>(.*?)</object>", xml):
+        if f"<name>{label}</name>" in obj:
+            return [int(re.search(f"<{k}>(\\d+)</{k}>", obj).group(1))
+                    for k in ("xmin", "ymin", "xmax", "ymax")]
+    return None
+
+
+def test_a_painted_crop_of_a_video_frame_is_searched_in_grey_when_colour_finds_nothing():
+    """A green buoy cut from a RoboSub pool frame (a circle for its mask) is
+    painted (saturated), so it is searched by its colour edges; in the next
+    frames those do not show it (the video's colour is coarser than its
+    grey) and a user trial found it in 1 of 27 frames. Its grey edges do:
+    found in its labelled box, flagged found_in_grey, at twice the grey
+    search's NFA (two searches); never when colour is asked for."""
+    frame = cv2.imread(str(data_path("objects", "robosub_transdec", "images", "1040.jpg")))
+    mask = np.zeros((69, 53), np.uint8)
+    cv2.circle(mask, (26, 26), 24, 255, -1)
+    pattern = seahough.Pattern.from_image(frame[176:245, 270:323], mask=mask)
+    assert pattern.painted
+    auto = seahough.Detector(pattern, (0.3, 2.0))
+    grey = seahough.Detector(pattern, (0.3, 2.0), config=seahough.Config(colour=False))
+    colour = seahough.Detector(pattern, (0.3, 2.0), config=seahough.Config(colour=True))
+    for n in (1044, 1046, 1047):
+        path = data_path("objects", "robosub_transdec", "images", f"{n}.jpg")
+        img = cv2.imread(str(path))
+        assert all("found_in_grey" not in d.flags for d in colour.detect(img))
+        found = auto.detect(str(path))               # (a path: decoded once for both)
+        x0, y0, x1, y1 = _buoy_box(n)
+        best = found[0]
+        assert x0 <= best.x <= x1 and y0 <= best.y <= y1, (n, best.x, best.y)
+        assert "found_in_grey" in best.flags
+        twin = grey.detect(img)[0]
+        assert (twin.x, twin.y) == (best.x, best.y) and math.isclose(best.nfa, 2 * twin.nfa)

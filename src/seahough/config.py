@@ -183,9 +183,13 @@ class Config:
         (:attr:`Pattern.painted <seahough.Pattern.painted>`: an orange or a
         green marker; not a grey pattern, a shape or a crop of a seabed
         photo), then at either polarity (a colour edge's sign depends on
-        the ground) and, in a grey image, by the pattern's grey edges; in
-        grey otherwise (:meth:`seahough.Pattern.in_colour`). A Detector of
-        several patterns decides for each.
+        the ground) and, in a grey image, by the pattern's grey edges (in a
+        colour image too when its colour search finds nothing: a crop of a
+        real video frame is painted, and the video's coarser colour may not
+        show it where its grey does; such detections are flagged
+        ``found_in_grey``, their NFA doubled for the two searches); in grey
+        otherwise (:meth:`seahough.Pattern.in_colour`). A Detector of
+        several patterns decides for each (without that second search).
     colour_boost : float
         With ``colour``: the searched image's channels are weighed by its
         own gradient statistics (:func:`seahough.core.preprocess.colour_metric`):

@@ -26,12 +26,12 @@ from .candidates import PoseComparison, SearchContext, find_candidates
 from .features import Features, extract_features
 from .pattern import Pattern
 from .preprocess import blank_border, choose_factor, prepare_image
-from .ranking import (FLAG_ALONG_LINE, FLAG_AMBIGUOUS, FLAG_OUTSIDE_RANGE, FLAG_PARTIAL,
-                      FLAG_RANGE_EDGE, Detection, confidence, line_parameters, rank)
+from .ranking import (FLAG_ALONG_LINE, FLAG_AMBIGUOUS, FLAG_GREY, FLAG_OUTSIDE_RANGE,
+                      FLAG_PARTIAL, FLAG_RANGE_EDGE, Detection, confidence, line_parameters, rank)
 
 __all__ = ["Detector", "SearchResult", "SEARCH_NOTES", "Detection", "confidence",
            "line_parameters", "FLAG_ALONG_LINE", "FLAG_AMBIGUOUS", "FLAG_OUTSIDE_RANGE",
-           "FLAG_RANGE_EDGE", "FLAG_PARTIAL"]
+           "FLAG_RANGE_EDGE", "FLAG_PARTIAL", "FLAG_GREY"]
 
 #: A texture pattern small in a large image: the key points taken put this
 #: many times its own voting points on its area (``Detector._n_keypoints``)
@@ -220,6 +220,9 @@ class Detector:
         t0 = time.perf_counter()
         if self.parts:
             return self._search_parts(image, features, t0)
+        if self._grey is not None and isinstance(image, (str, os.PathLike)):
+            # (decoded once: a colour search that finds nothing is done again in grey)
+            image = read_image(image, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
         gray = to_image(image, cfg.colour, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb,
                         bit_depth=cfg.bit_depth)
         if features is None and not self.pattern.is_frame:
@@ -228,7 +231,40 @@ class Detector:
             gray = prepare_image(gray, cfg)
         if self._grey is not None and gray.ndim == 2:
             return self._grey._search_in_grey(gray, features, t0)
-        return self._search_pattern(gray, features, t0)
+        res = self._search_pattern(gray, features, t0)
+        if self._grey is not None and not res.detections and features is None:
+            return self._grey_after_colour(image, res, t0)
+        return res
+
+    def _grey_after_colour(self, image, res: SearchResult, t0: float) -> SearchResult:
+        """A painted pattern's colour search (``Config.colour`` None) that
+        found nothing, searched again by its grey edges in the grey image:
+        a crop of a real video frame is painted (saturated water, a green
+        buoy), and the video's colour edges (chroma subsampled, compressed)
+        may not show it where its grey ones do. Two searches: each found
+        detection's NFA is doubled (and must still be at most ``max_nfa``),
+        and flagged :data:`~.ranking.FLAG_GREY`. ``res`` when nothing is
+        found this way either."""
+        # (the grey image as a grey search makes it: the image's grey levels, then
+        # prepared; half a level of rounding moved NFAs 8-fold)
+        cfg = self.config
+        gray = prepare_image(to_image(image, False, max_pixels=cfg.max_pixels,
+                                      max_memory_mb=cfg.max_memory_mb, bit_depth=cfg.bit_depth),
+                             cfg)
+        try:
+            alt = self._grey._search_pattern(gray, None, t0)
+        except PatternError:                       # (no grey edges in the pattern)
+            return res
+        kept = []
+        for d in alt.detections:
+            d.nfa *= 2.0
+            if d.nfa <= self.max_nfa:
+                d.flags = tuple(d.flags) + (FLAG_GREY,)
+                kept.append(d)
+        if not kept:
+            return res
+        alt.detections = kept
+        return alt
 
     def _search_in_grey(self, gray, features, t0, name: str = "", factor=None) -> SearchResult:
         """The search of a painted pattern's grey twin in a grey image: a

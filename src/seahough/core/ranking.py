@@ -39,6 +39,9 @@ FLAG_OUTSIDE_RANGE = "outside_search_range"
 #: further than searched, and only a part of it matched; widen the range
 #: to see.
 FLAG_RANGE_EDGE = "at_search_range_edge"
+#: Flag when a painted pattern searched in colour (``Config.colour`` None)
+#: found nothing and its grey edges found this: its NFA counts both searches.
+FLAG_GREY = "found_in_grey"
 #: A candidate's pose may move this share of the pattern's size to a shift
 #: more of its points agree on (:func:`_alternatives`).
 CAPTURE = 0.1
