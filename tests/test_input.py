@@ -179,3 +179,41 @@ def test_bad_config_raises_parameter_error_naming_the_field(kw):
 def test_bad_shape_parameters_raise(make):
     with pytest.raises((ParameterError, PatternError)):
         make()
+
+
+def test_a_video_frame_by_its_name_and_every_frame_in_order(tmp_path, caplog):
+    """A video's frames as list_frames names them ("dive.avi#2") are images
+    for read_image and a Detector; iter_frames gives each frame of a video,
+    folder or list in order, an unreadable one as (name, None) with its
+    reason logged, and goes on (a user trial found "dive.mp4#3: no such
+    file" in Python, where the command line read the video)."""
+    import logging
+
+    import cv2
+
+    path = tmp_path / "dive.avi"
+    w = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 5, (160, 120))
+    for k in range(3):
+        f = np.full((120, 160, 3), 50, np.uint8)
+        cv2.rectangle(f, (40 + 10 * k, 40), (100 + 10 * k, 80), (220, 220, 220), -1)
+        w.write(f)
+    w.release()
+    names = seahough.list_frames(path)
+    assert [n.split("/")[-1] for n in map(str, names)] == ["dive.avi#0", "dive.avi#1", "dive.avi#2"]
+    third = seahough.read_image(names[2])
+    assert third.shape == (120, 160, 3)
+    found = seahough.Detector(seahough.Pattern.rectangle(60, 40), max_results=1).detect(names[2])
+    assert abs(found[0].x - 90) < 1.5 and abs(found[0].y - 60) < 1.5
+    frames = list(seahough.iter_frames(path))
+    assert [str(n) for n, _ in frames] == [str(n) for n in names]
+    assert np.array_equal(frames[2][1], third)
+    with pytest.raises(seahough.ImageReadError, match="no such file"):
+        seahough.read_image(tmp_path / "dive.avi#x")
+    # a list with a damaged file: its name and None, the reason logged, the rest read
+    good, bad = tmp_path / "a.png", tmp_path / "bad.png"
+    cv2.imwrite(str(good), frames[0][1])
+    bad.write_bytes(b"\x89PNG not really")
+    with caplog.at_level(logging.WARNING, logger="seahough.io"):
+        got = list(seahough.iter_frames([str(good), str(bad), str(good)]))
+    assert [img is None for _, img in got] == [False, True, False]
+    assert "bad.png" in caplog.text

@@ -253,6 +253,39 @@ def list_frames(frames) -> list:
     return out
 
 
+def iter_frames(frames, *, max_pixels: int = 200_000_000, max_memory_mb: float = MAX_MEMORY_MB):
+    """``(name, image)`` for each frame of ``frames`` in order, decoded one
+    at a time: a folder, a video or a list, as :func:`list_frames` takes
+    them (a video's frames named ``"dive.mp4#<k>"``). A frame that cannot
+    be read comes as ``(name, None)``, its reason logged at WARNING level on
+    the ``"seahough.io"`` logger, and the frames after it are read on.
+
+    Examples
+    --------
+    >>> import tempfile, cv2
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     path = os.path.join(d, "dive.avi")
+    ...     w = cv2.VideoWriter(path, cv2.VideoWriter_fourcc(*"MJPG"), 5, (64, 48))
+    ...     for k in range(3):
+    ...         _ = w.write(np.full((48, 64, 3), 40 * k, np.uint8))
+    ...     w.release()
+    ...     [(os.path.basename(n), img.shape) for n, img in iter_frames(path)]
+    [('dive.avi#0', (48, 64, 3)), ('dive.avi#1', (48, 64, 3)), ('dive.avi#2', (48, 64, 3))]
+    """
+    items = list_frames(frames)
+    reader = FrameReader(items, max_pixels, max_memory_mb)
+    try:
+        for i in range(len(items)):
+            try:
+                image = reader.raw(i)
+            except ImageError as e:
+                log.warning("%s", printable(str(e)))
+                image = None
+            yield reader.name(i), image
+    finally:
+        reader.close()
+
+
 def _not_read(entries) -> str:
     """What of a folder's entries that are not images (``(os.DirEntry,
     lower-case extension)`` pairs) may have been meant as frames, said in

@@ -168,7 +168,10 @@ def read_image(path: str | os.PathLike, *, max_pixels: int = 200_000_000,
     path : str or PathLike
         The file: JPEG, PNG, TIFF, WebP, BMP, a single-frame GIF, or any
         other format OpenCV reads. Bytes after the image (a phone's motion
-        video after a JPEG, a camera's trailer) are ignored.
+        video after a JPEG, a camera's trailer) are ignored. Also a video's
+        frame as :func:`~seahough.list_frames` names it, ``"dive.mp4#12"``
+        (decoded from the video's start: :func:`~seahough.iter_frames`
+        reads them all in order).
     max_pixels : int
         Files whose header claims more pixels are refused before decoding.
     max_memory_mb : float
@@ -202,6 +205,17 @@ def read_image(path: str | os.PathLike, *, max_pixels: int = 200_000_000,
     number("max_memory_mb", max_memory_mb, lo=0.0, lo_open=True)
     p = Path(path)
     if not p.exists():
+        from .frames import FrameReader, split_video_ref
+
+        ref = split_video_ref(str(path))
+        if ref is not None and Path(ref[0]).is_file():
+            # a video's frame, as seahough.list_frames names it (decoded from the
+            # start: iter_frames reads a video's frames in order)
+            reader = FrameReader([str(path)], max_pixels, max_memory_mb)
+            try:
+                return reader.raw(0)
+            finally:
+                reader.close()
         raise ImageReadError(f"{p}: no such file")
     if p.is_dir():
         raise ImageReadError(f"{p}: is a folder, not an image")
