@@ -150,6 +150,9 @@ def test_detect_csv_holds_what_json_holds(scenes, tmp_path):
     assert abs(float(found[0]["x"]) - truth.x) < 2
     (neg,) = [r for r in rows if r["file"].endswith("neg.png")]   # one row, nothing found
     assert neg["found"] == "false" and neg["rank"] == "" and neg["x"] == ""
+    # ... its best declined candidate's reason, as the JSON has it; a detection's row: none
+    assert neg["declined"] == (recs[1]["best_declined"] or {}).get("declined", "")
+    assert neg["declined"] and all(r["declined"] == "" for r in found)
     # a name with a line break, a comma and a quote stays one field
     odd = tmp_path / 'new\nline, "q".png'
     odd.write_bytes((d / "neg.png").read_bytes())

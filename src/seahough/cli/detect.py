@@ -391,7 +391,8 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, draw=None, b
               help="One JSON object per image and line (JSON Lines) instead of tables.")
 @click.option("--csv", "as_csv", is_flag=True,
               help="CSV instead of tables: a header, then a row per detection (an image with "
-              "none: one row, found false); lists (flags, matrix, points) as JSON text.")
+              "none: one row, found false, and in its last column, declined, why the best "
+              "candidate was not reported); lists (flags, matrix, points) as JSON text.")
 @click.option("--out", "-o", type=click.Path(file_okay=False), default=None,
               help="Write pictures per image here: <stem>_overlay.png (detections), "
               "<stem>_accumulator.png (the vote planes; each pattern's when several) and "
@@ -507,7 +508,7 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
 #: shape's, a line's or a curve's: those that do not apply are empty).
 CSV_COLUMNS = ("file", "width", "height", "found", "note", "time_ms", "rank", "pattern", "kind",
                "x", "y", "scale", "angle", "score", "confidence", "nfa", "flags", "line_angle",
-               "line_offset", "width_px", "length", "votes", "matrix", "points")
+               "line_offset", "width_px", "length", "votes", "matrix", "points", "declined")
 
 
 def _csv_line(values) -> str:
@@ -517,21 +518,24 @@ def _csv_line(values) -> str:
     return buf.getvalue()[:-2]
 
 
-def _csv_rows(name, w, h, note, ms, dets):
-    """The CSV lines of one image (:data:`CSV_COLUMNS`)."""
+def _csv_rows(name, w, h, note, ms, dets, near=None):
+    """The CSV lines of one image (:data:`CSV_COLUMNS`); ``near``: the best
+    declined candidate of an image without detections (its row's
+    ``declined``: why it was not reported)."""
     head = [name, int(w), int(h), "true" if dets else "false", note, round(ms, 3)]
     if not dets:
-        return [_csv_line(head + [""] * (len(CSV_COLUMNS) - len(head)))]
+        why = near.declined if near is not None else ""
+        return [_csv_line(head + [""] * (len(CSV_COLUMNS) - len(head) - 1) + [why])]
     out = []
     for rank, d in enumerate(dets, 1):
         rec = d.to_dict()
         rec["width_px"] = rec.pop("width", None)   # (a curve's width, not the image's)
         row = head + [rank]
-        for col in CSV_COLUMNS[7:]:
+        for col in CSV_COLUMNS[7:-1]:
             v = rec.get(col)
             row.append("" if v is None else json.dumps(v, separators=(",", ":"))
                        if isinstance(v, (list, tuple, dict)) else v)
-        out.append(_csv_line(row))
+        out.append(_csv_line(row + [""]))
     return out
 
 
@@ -556,7 +560,8 @@ def _report(outcomes, bar, say, form: str, quiet: bool) -> tuple[int, int]:
         if not dets:
             n_missing += 1
         if form == "csv":
-            for line in _csv_rows(name, w, h, res.note, ms, dets):
+            for line in _csv_rows(name, w, h, res.note, ms, dets,
+                                  None if dets else best_declined(res)):
                 say(line)
             if failed is not None:
                 say.error(printable(str(failed)))
