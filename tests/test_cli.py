@@ -979,3 +979,29 @@ def test_detect_reads_a_video_frame_by_frame(tmp_path):
     proc = run("detect", "rect:60,40", path, "--out", tmp_path / "pics", "--pictures", "overlay")
     assert sorted(p.name for p in (tmp_path / "pics").iterdir()) == [
         f"dive_{i:05d}_overlay.png" for i in range(4)]
+
+
+def test_odometry_notes_a_scene_whose_scale_changes_much(tmp_path):
+    """A camera that looks ahead (or an altitude that changes much) makes the
+    scene's scale drift: a user's forward-looking pool video reached 1.8x
+    with nothing said. The summary keeps the scales seen; the command notes
+    a change over 1.4x; a steady survey gets no note."""
+    rng = np.random.default_rng(8)
+    big = cv2.GaussianBlur(rng.uniform(0, 255, (900, 1200)).astype(np.float32), (0, 0), 3)
+    big = np.clip(128 + 4 * (big - big.mean()), 0, 255).astype(np.uint8)
+    for name, zoom, step in (("zoom", 1.08, 0), ("steady", 1.0, 12)):
+        d = tmp_path / name
+        d.mkdir()
+        for k in range(8):
+            s = zoom ** k
+            m = np.array([[s, 0, 160 - s * (600 + step * k)], [0, s, 120 - s * 450]])
+            cv2.imwrite(str(d / f"f{k}.png"), cv2.warpAffine(big, m, (320, 240)))
+        proc = run("odometry", d, "--out", tmp_path / f"o_{name}", "--no-mosaic", "--quiet")
+        summary = json.loads((tmp_path / f"o_{name}" / "summary.json").read_text())
+        seen = summary["scale_seen"]
+        if name == "zoom":
+            assert seen["max"] > 1.5 and seen["max_frame"] == 7, seen
+            assert "note: the scene's scale changed" in proc.stdout, proc.stdout
+        else:
+            assert 0.97 < seen["min"] <= seen["max"] < 1.03, seen
+            assert "scale changed" not in proc.stdout, proc.stdout

@@ -179,6 +179,12 @@ def check_inputs(frames, metres_per_pixel, altitude, focal_px) -> None:
             raise _Fail(f"{printable(f)}: no such file or folder")
 
 
+#: the end note that a run's scale changed (a camera looking ahead, an
+#: altitude that changed), when its largest scale is this many times its
+#: smallest
+SCALE_NOTE = 1.4
+
+
 def report(result, seconds: float, unit: str, as_json: bool) -> int:
     """Print a run's summary (one JSON object, or lines: the totals, the
     first 10 flagged frames, the files written); the exit status: 1 when
@@ -214,6 +220,13 @@ def report(result, seconds: float, unit: str, as_json: bool) -> int:
                    f"(frames {', '.join(str(g) for g in gaps[:10])}"
                    f"{', ...' if len(gaps) > 10 else ''}): each step is measured, but the "
                    "positions from there on carry the assumed poses before it")
+    seen = summ["summary"].get("scale_seen")
+    if seen and seen["max"] / seen["min"] > SCALE_NOTE:
+        click.echo(f"  note: the scene's scale changed {seen['max'] / seen['min']:.2f}x over the "
+                   f"run (frame {seen['min_frame']}: {seen['min']:.2f}, frame "
+                   f"{seen['max_frame']}: {seen['max']:.2f}): a camera that looks ahead, or a "
+                   "large change of altitude; the track and its metres assume a camera that "
+                   "looks down from a steady height")
     files = [summ[k] for k in ("csv", "json", "trajectory", "mosaic") if summ[k]]
     if files:
         click.echo("wrote: " + ", ".join(printable(f) for f in files))
