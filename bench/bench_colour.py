@@ -108,10 +108,11 @@ def defaults_in_colour() -> str:
     if colours == {True}:
         return ("**At the defaults** (`Config()`, whose `colour` is None: in colour for a "
                 "painted pattern, `Pattern.painted`), every marker pattern here, in every paint, "
-                "is searched in colour: the colour row is what a user gets without asking, but "
-                "that a scene where the colour search finds nothing is searched by its grey "
-                "edges too (detections flagged `found_in_grey`, NFA doubled): at most the "
-                "scenes found by grey only in the table of both variants below, gained.")
+                "is searched in colour: the colour row is what a user gets without asking, "
+                "except where the colour search finds nothing: such a scene is then searched "
+                "by its grey edges too (detections flagged `found_in_grey`, the NFA counting "
+                "both searches), which can add at most the scenes that only the grey variant "
+                "finds (the table of both variants below).")
     if colours == {False}:
         return ("**At the defaults** (`Config()`) every marker pattern here is searched in grey: "
                 "the grey row is what a user gets without asking.")

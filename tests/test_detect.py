@@ -443,15 +443,23 @@ def test_a_painted_crop_of_a_video_frame_is_searched_in_grey_when_colour_finds_n
     assert pattern.painted
     auto = seahough.Detector(pattern, (0.3, 2.0))
     grey = seahough.Detector(pattern, (0.3, 2.0), config=seahough.Config(colour=False))
-    colour = seahough.Detector(pattern, (0.3, 2.0), config=seahough.Config(colour=True))
     for n in (1044, 1046, 1047):
         path = data_path("objects", "robosub_transdec", "images", f"{n}.jpg")
         img = cv2.imread(str(path))
-        assert all("found_in_grey" not in d.flags for d in colour.detect(img))
-        found = auto.detect(str(path))               # (a path: decoded once for both)
+        res = auto.search(str(path))                 # (a path: decoded once for both)
         x0, y0, x1, y1 = _buoy_box(n)
-        best = found[0]
+        best = res.detections[0]
         assert x0 <= best.x <= x1 and y0 <= best.y <= y1, (n, best.x, best.y)
         assert "found_in_grey" in best.flags
         twin = grey.detect(img)[0]
         assert (twin.x, twin.y) == (best.x, best.y) and math.isclose(best.nfa, 2 * twin.nfa)
+        # its candidate says the same NFA (both searches counted there too)
+        [c] = [c for c in res.candidates if not c.declined and c.pose.tx == best.x]
+        assert math.isclose(c.nfa, best.nfa)
+    # max_nfa is judged on the doubled NFA: under twice the grey NFA, declined, and
+    # the reason names it
+    tight = seahough.Detector(pattern, (0.3, 2.0), max_nfa=1.5 * twin.nfa)
+    res = tight.search(img)
+    assert res.detections == []
+    assert any(c.declined.startswith("NFA") and math.isclose(c.nfa, 2 * twin.nfa)
+               for c in res.candidates), [(c.nfa, c.declined) for c in res.candidates]

@@ -209,6 +209,9 @@ def test_a_video_frame_by_its_name_and_every_frame_in_order(tmp_path, caplog):
     assert np.array_equal(frames[2][1], third)
     with pytest.raises(seahough.ImageReadError, match="no such file"):
         seahough.read_image(tmp_path / "dive.avi#x")
+    # a frame past the end: said so, without decoding on to it
+    with pytest.raises(seahough.ImageReadError, match="past the end of the video"):
+        seahough.read_image(f"{path}#999999999")
     # a list with a damaged file: its name and None, the reason logged, the rest read
     good, bad = tmp_path / "a.png", tmp_path / "bad.png"
     cv2.imwrite(str(good), frames[0][1])

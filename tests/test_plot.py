@@ -902,3 +902,13 @@ def test_outlines_drawn_small_are_thin_lines_and_thin_strips_their_centre_line()
     assert len(pts) == 2 and fx is _THIN_OUTLINE
     ends = sorted(map(tuple, np.round(pts, 3)))
     assert np.allclose(ends, sorted(map(tuple, np.round([[100, 50], rot @ [80, 0] + [100, 50]], 3))))
+
+
+def test_a_thin_shape_that_is_no_straight_strip_keeps_its_outline():
+    """An L or a U drawn small is not a strip: its thin outline, not a line
+    through the empty space of its bounding box (a review found one)."""
+    from seahough.viz.detections import _THIN_OUTLINE, _outline_style
+
+    ell = np.array([[0, 0], [4, 0], [4, 36], [40, 36], [40, 40], [0, 40]], float) + 100
+    pts, lw, fx = _outline_style(ell, 0.25)
+    assert len(pts) == 7 and fx is _THIN_OUTLINE

@@ -244,6 +244,9 @@ class SearchContext:
     #: the rotations the caller asked for, when the search tried fewer (a disc
     #: is searched at one): the number of false alarms still counts them
     asked_angles: tuple | None = None
+    #: how many searches of the image this one completes (a painted pattern's
+    #: grey search after an empty colour one: 2): the number of tests counts them
+    searches: int = 1
 
     @property
     def n_candidates(self) -> int:

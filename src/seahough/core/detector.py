@@ -220,11 +220,12 @@ class Detector:
         t0 = time.perf_counter()
         if self.parts:
             return self._search_parts(image, features, t0)
+        label = str(image) if isinstance(image, (str, os.PathLike)) else "image"
         if self._grey is not None and isinstance(image, (str, os.PathLike)):
             # (decoded once: a colour search that finds nothing is done again in grey)
             image = read_image(image, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
-        gray = to_image(image, cfg.colour, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb,
-                        bit_depth=cfg.bit_depth)
+        gray = to_image(image, cfg.colour, name=label, max_pixels=cfg.max_pixels,
+                        max_memory_mb=cfg.max_memory_mb, bit_depth=cfg.bit_depth)
         if features is None and not self.pattern.is_frame:
             # (given features: the caller prepared the image; a frame pattern, in
             # photo motion, is matched to the next frame as both come)
@@ -233,37 +234,38 @@ class Detector:
             return self._grey._search_in_grey(gray, features, t0)
         res = self._search_pattern(gray, features, t0)
         if self._grey is not None and not res.detections and features is None:
-            return self._grey_after_colour(image, res, t0)
+            return self._grey_after_colour(image, label, res, t0)
         return res
 
-    def _grey_after_colour(self, image, res: SearchResult, t0: float) -> SearchResult:
+    def _grey_after_colour(self, image, label: str, res: SearchResult,
+                           t0: float) -> SearchResult:
         """A painted pattern's colour search (``Config.colour`` None) that
         found nothing, searched again by its grey edges in the grey image:
         a crop of a real video frame is painted (saturated water, a green
         buoy), and the video's colour edges (chroma subsampled, compressed)
-        may not show it where its grey ones do. Two searches: each found
-        detection's NFA is doubled (and must still be at most ``max_nfa``),
-        and flagged :data:`~.ranking.FLAG_GREY`. ``res`` when nothing is
-        found this way either."""
+        may not show it where its grey ones do. The grey search's number of
+        false alarms counts both searches (its candidates', its detections',
+        and ``max_nfa`` is judged on them); its detections are flagged
+        :data:`~.ranking.FLAG_GREY`. Nothing found this way either: the
+        colour search's result, with the grey search's candidates after its
+        own (their reasons)."""
+        if res.note and res.note != "no edges":    # (the pattern larger than the image...)
+            return res
+        cfg = self.config
         # (the grey image as a grey search makes it: the image's grey levels, then
         # prepared; half a level of rounding moved NFAs 8-fold)
-        cfg = self.config
-        gray = prepare_image(to_image(image, False, max_pixels=cfg.max_pixels,
+        gray = prepare_image(to_image(image, False, name=label, max_pixels=cfg.max_pixels,
                                       max_memory_mb=cfg.max_memory_mb, bit_depth=cfg.bit_depth),
                              cfg)
         try:
-            alt = self._grey._search_pattern(gray, None, t0)
+            alt = self._grey._search_pattern(gray, None, t0, searches=2)
         except PatternError:                       # (no grey edges in the pattern)
             return res
-        kept = []
-        for d in alt.detections:
-            d.nfa *= 2.0
-            if d.nfa <= self.max_nfa:
-                d.flags = tuple(d.flags) + (FLAG_GREY,)
-                kept.append(d)
-        if not kept:
+        if not alt.detections:
+            res.candidates = list(res.candidates) + list(alt.candidates)
             return res
-        alt.detections = kept
+        for d in alt.detections:
+            d.flags = tuple(d.flags) + (FLAG_GREY,)
         return alt
 
     def _search_in_grey(self, gray, features, t0, name: str = "", factor=None) -> SearchResult:
@@ -278,7 +280,8 @@ class Detector:
                                 note=f"grey image, pattern edges in colour only: {e}")
 
     def _search_pattern(self, gray, features: Features | None, t0: float,
-                        name: str = "", factor: float | None = None) -> SearchResult:
+                        name: str = "", factor: float | None = None,
+                        searches: int = 1) -> SearchResult:
         """The search of this Detector's one pattern in a working image
         (``features`` and their ``factor`` given: already computed)."""
         cfg = self.config
@@ -319,7 +322,8 @@ class Detector:
                             angles, self.max_results, self.min_score,
                             PoseComparison(p, pf, bins.step, self.scale_range,
                                            angles, cfg.search.overlap),
-                            self.max_nfa, self.angle_range if angles != self.angle_range else None)
+                            self.max_nfa, self.angle_range if angles != self.angle_range else None,
+                            searches)
         cands = find_candidates(ctx, votes)
         t3 = time.perf_counter()
         timings["peaks_refine"] = t3 - t2
@@ -405,7 +409,8 @@ class Detector:
         computed once per working scale (patterns of similar size share
         one) and per kind of edges (grey, colour: each pattern's own
         ``Config.colour``), so each pattern finds what it would find
-        searched alone."""
+        searched alone (but a painted pattern whose colour search finds
+        nothing is not searched again by its grey edges, as alone it is)."""
         cfg = self.config
         parts = self.parts
         kinds = sorted({bool(d.config.colour) for d in parts.values()})

@@ -40,7 +40,8 @@ FLAG_OUTSIDE_RANGE = "outside_search_range"
 #: to see.
 FLAG_RANGE_EDGE = "at_search_range_edge"
 #: Flag when a painted pattern searched in colour (``Config.colour`` None)
-#: found nothing and its grey edges found this: its NFA counts both searches.
+#: found nothing and its grey edges found this: its NFA (and its search's
+#: candidates') counts both searches.
 FLAG_GREY = "found_in_grey"
 #: A candidate's pose may move this share of the pattern's size to a shift
 #: more of its points agree on (:func:`_alternatives`).
@@ -499,7 +500,8 @@ def search_tests(ctx: SearchContext) -> float:
     # of discs and rings on real photos rose from 0.14 to 0.24 a search, with
     # the bound model of the seventh session)
     angles = ctx.asked_angles or ctx.angle_range
-    return log10_tests(area, pf.radius, ctx.scale_range, angles, period, span, width, length)
+    return (log10_tests(area, pf.radius, ctx.scale_range, angles, period, span, width, length)
+            + math.log10(ctx.searches))
 
 
 def to_detection(ctx: SearchContext, c: Candidate, conf: float, shape) -> Detection:

@@ -28,8 +28,8 @@ from ..config import MAX_MEMORY_MB
 from ..errors import ImageError, ImageReadError, ParameterError
 from .images import read_image
 
-__all__ = ["list_frames", "time_from_name", "FrameReader", "printable", "IMAGE_EXTENSIONS",
-           "VIDEO_EXTENSIONS"]
+__all__ = ["list_frames", "iter_frames", "time_from_name", "FrameReader", "printable",
+           "IMAGE_EXTENSIONS", "VIDEO_EXTENSIONS"]
 
 # FFmpeg prints what it thinks of damaged video data ("[mjpeg @ 0x...] bad vlc")
 # on the process's stderr, where it would reach the user as stray lines: the
@@ -472,9 +472,17 @@ class FrameReader:
             self._cap_path, self._cap_next = path, 0
             if not self._cap.isOpened():
                 raise ImageReadError(f"{path}: cannot open the video")
+        failed = 0
         while self._cap_next < k:
-            self._cap.grab()        # a frame that cannot be decoded still takes its place
+            # a frame that cannot be decoded still takes its place; many in a row:
+            # the video has ended
+            failed = 0 if self._cap.grab() else failed + 1
             self._cap_next += 1
+            if failed >= _GIVE_UP_GRABS:
+                end = self._cap_next - failed
+                self.close()
+                raise ImageReadError(f"{printable(str(it))}: past the end of the video (its "
+                                     f"frames end before frame {end})")
         ok, img = self._cap.read()
         self._cap_next += 1
         if not ok or img is None:

@@ -263,9 +263,9 @@ class Totals:
         self.end = None
         self.ms_sum, self.ms_n = 0.0, 0
         self.after_gap: list = []
-        #: the smallest and largest scale of the measured poses (frame 0: 1),
-        #: and the frames where they were
-        self.scales = [(1.0, 0), (1.0, 0)]
+        #: the smallest and largest scale of the measured poses (the first
+        #: one's: 1), and the frames where they were
+        self.scales = None
 
     def add(self, r):
         self.frames += 1
@@ -285,8 +285,8 @@ class Totals:
             if r["status"] != "assumed":
                 sc = r.get("scale")
                 if sc is not None and math.isfinite(sc) and sc > 0:
-                    self.scales = [min(self.scales[0], (sc, r["index"])),
-                                   max(self.scales[1], (sc, r["index"]))]
+                    seen = self.scales or [(sc, r["index"])] * 2
+                    self.scales = [min(seen[0], (sc, r["index"])), max(seen[1], (sc, r["index"]))]
                 if self.last_xy is not None:
                     self.length += math.hypot(r["x"] - self.last_xy[0], r["y"] - self.last_xy[1])
                 self.last_xy = (r["x"], r["y"])
@@ -346,8 +346,9 @@ def summarise(t: Totals, items, mpp, scale_range, angle_range, cfg, tuning, n_re
         "path_length_m": length * mpp if mpp else None,
         "end_point": t.end,
         "after_gap": list(t.after_gap),
-        "scale_seen": {"min": t.scales[0][0], "min_frame": t.scales[0][1],
-                       "max": t.scales[1][0], "max_frame": t.scales[1][1]},
+        "scale_seen": None if t.scales is None else {
+            "min": t.scales[0][0], "min_frame": t.scales[0][1],
+            "max": t.scales[1][0], "max_frame": t.scales[1][1]},
         "mean_ms_per_frame": mean_ms,
         "resumed_rows": n_resumed,
         "wall_s": wall_s,

@@ -205,8 +205,8 @@ def _outline_style(outline, px_per_px: float):
     narrow, long = sorted((rw, rh))
     if narrow * px_per_px >= _THIN_BELOW:
         return closed, 2.2, _OUTLINE
-    if long < 3.0 * max(narrow, 1e-9):
-        return closed, 1.2, _THIN_OUTLINE
+    if long < 3.0 * max(narrow, 1e-9) or cv2.contourArea(o.astype(np.float32)) < 0.8 * rw * rh:
+        return closed, 1.2, _THIN_OUTLINE     # (compact, or not a straight strip: an L, a U)
     t = np.radians(ang + (0.0 if rw >= rh else 90.0))
     half = 0.5 * long * np.array([np.cos(t), np.sin(t)])
     return np.array([[cx, cy] - half, [cx, cy] + half]), 1.2, _THIN_OUTLINE
