@@ -6,6 +6,7 @@ import os
 import sys
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 
@@ -115,3 +116,18 @@ def run_bench_code(code: str, timeout: float = 300) -> str:
                           text=True, timeout=timeout)
     assert proc.returncode == 0, proc.stderr[-3000:]
     return proc.stdout
+
+
+def moving_rectangle_video(path, n: int, size=(320, 240), start=(100, 80), step: int = 10,
+                           fourcc: str = "mp4v"):
+    """A video of ``n`` frames: a light 60x40 rectangle on grey, its top left at
+    ``start`` and moving right by ``step`` px a frame; returns ``path``."""
+    w, h = size
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*fourcc), 5, (w, h))
+    for k in range(n):
+        f = np.full((h, w, 3), 60, np.uint8)
+        x, y = start[0] + step * k, start[1]
+        cv2.rectangle(f, (x, y), (x + 60, y + 40), (200, 200, 200), -1)
+        writer.write(f)
+    writer.release()
+    return path

@@ -22,7 +22,7 @@ import seahough
 from seahough import sim as sim
 from seahough._data import shared_data_dir
 
-from conftest import seahough_command
+from conftest import moving_rectangle_video, seahough_command
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -962,13 +962,7 @@ def test_detect_takes_a_folder_for_its_images(tmp_path):
 def test_detect_reads_a_video_frame_by_frame(tmp_path):
     """A video among the IMAGEs: each frame searched, named VIDEO#N, in
     order (also with several workers), its pictures VIDEO-STEM_0000N."""
-    path = tmp_path / "dive.mp4"
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), 5, (320, 240))
-    for i in range(4):
-        f = np.full((240, 320, 3), 60, np.uint8)
-        cv2.rectangle(f, (100 + 10 * i, 80), (160 + 10 * i, 120), (200, 200, 200), -1)
-        writer.write(f)
-    writer.release()
+    path = moving_rectangle_video(tmp_path / "dive.mp4", 4)
     for workers in (1, 2):
         proc = run("detect", "rect:60,40", path, "--json", "-n", 1, "--workers", workers)
         assert proc.returncode == 0, proc.stderr

@@ -189,15 +189,9 @@ def test_a_video_frame_by_its_name_and_every_frame_in_order(tmp_path, caplog):
     file" in Python, where the command line read the video)."""
     import logging
 
-    import cv2
+    from conftest import moving_rectangle_video
 
-    path = tmp_path / "dive.avi"
-    w = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 5, (160, 120))
-    for k in range(3):
-        f = np.full((120, 160, 3), 50, np.uint8)
-        cv2.rectangle(f, (40 + 10 * k, 40), (100 + 10 * k, 80), (220, 220, 220), -1)
-        w.write(f)
-    w.release()
+    path = moving_rectangle_video(tmp_path / "dive.avi", 3, (160, 120), (40, 40), fourcc="MJPG")
     names = seahough.list_frames(path)
     assert [n.split("/")[-1] for n in map(str, names)] == ["dive.avi#0", "dive.avi#1", "dive.avi#2"]
     third = seahough.read_image(names[2])
