@@ -203,6 +203,9 @@ def test_a_video_frame_by_its_name_and_every_frame_in_order(tmp_path, caplog):
     assert np.array_equal(frames[2][1], third)
     with pytest.raises(seahough.ImageReadError, match="no such file"):
         seahough.read_image(tmp_path / "dive.avi#x")
+    # a folder that is not there: at the call, not at the first frame
+    with pytest.raises(seahough.ParameterError, match="no such"):
+        seahough.iter_frames(tmp_path / "nowhere")
     # a frame past the end: said so, without decoding on to it
     with pytest.raises(seahough.ImageReadError, match="past the end of the video"):
         seahough.read_image(f"{path}#999999999")

@@ -256,9 +256,12 @@ def list_frames(frames) -> list:
 def iter_frames(frames, *, max_pixels: int = 200_000_000, max_memory_mb: float = MAX_MEMORY_MB):
     """``(name, image)`` for each frame of ``frames`` in order, decoded one
     at a time: a folder, a video or a list, as :func:`list_frames` takes
-    them (a video's frames named ``"dive.mp4#<k>"``). A frame that cannot
-    be read comes as ``(name, None)``, its reason logged at WARNING level on
-    the ``"seahough.io"`` logger, and the frames after it are read on.
+    them (a video's frames named ``"dive.mp4#<k>"``; the video is read
+    through once first, to count them). A frame that cannot be read comes
+    as ``(name, None)``, its reason logged at WARNING level on the
+    ``"seahough.io"`` logger, and the frames after it are read on. What
+    :func:`list_frames` refuses (no such folder, a video that cannot be
+    opened) raises here, at the call.
 
     Examples
     --------
@@ -273,9 +276,13 @@ def iter_frames(frames, *, max_pixels: int = 200_000_000, max_memory_mb: float =
     [('dive.avi#0', (48, 64, 3)), ('dive.avi#1', (48, 64, 3)), ('dive.avi#2', (48, 64, 3))]
     """
     items = list_frames(frames)
-    reader = FrameReader(items, max_pixels, max_memory_mb)
+    return _frames_of(FrameReader(items, max_pixels, max_memory_mb))
+
+
+def _frames_of(reader: FrameReader):
+    """:func:`iter_frames`' generator over the reader's items."""
     try:
-        for i in range(len(items)):
+        for i in range(len(reader.items)):
             try:
                 image = reader.raw(i)
             except ImageError as e:
