@@ -381,7 +381,7 @@ def config_record(config: Config) -> dict:
     (False, 12)
     >>> "hole_support" in config_record(Config())["search"]
     False
-    >>> "smooth" in config_record(Config()), config_record(Config(smooth=2))["smooth"]
+    >>> "smooth" in config_record(Config()), config_record(Config(smooth=2.0))["smooth"]
     (False, 2.0)
     """
     rec = dataclasses.asdict(config)
