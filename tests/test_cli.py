@@ -153,6 +153,7 @@ def test_detect_csv_holds_what_json_holds(scenes, tmp_path):
     # ... its best declined candidate's reason, as the JSON has it; a detection's row: none
     assert neg["declined"] == (recs[1]["best_declined"] or {}).get("declined", "")
     assert neg["declined"] and all(r["declined"] == "" for r in found)
+    assert all(r["frame"] == "" for r in rows) and "frame" not in recs[0]   # (files: none)
     # a name with a line break, a comma and a quote stays one field
     odd = tmp_path / 'new\nline, "q".png'
     odd.write_bytes((d / "neg.png").read_bytes())
@@ -968,8 +969,12 @@ def test_detect_reads_a_video_frame_by_frame(tmp_path):
         assert proc.returncode == 0, proc.stderr
         recs = [json.loads(line) for line in proc.stdout.splitlines()]
         assert [r["file"] for r in recs] == [f"{path}#{i}" for i in range(4)]
+        assert [r["frame"] for r in recs] == [0, 1, 2, 3]
         xs = [r["detections"][0]["x"] for r in recs]
         assert np.allclose(np.diff(xs), 10.0, atol=1.0), xs
+    rows = list(csv.DictReader(io.StringIO(run("detect", "rect:60,40", path, "--csv", "-n", 1,
+                                               "-q").stdout)))
+    assert [r["frame"] for r in rows] == ["0", "1", "2", "3"]
     proc = run("detect", "rect:60,40", path, "--out", tmp_path / "pics", "--pictures", "overlay")
     assert sorted(p.name for p in (tmp_path / "pics").iterdir()) == [
         f"dive_{i:05d}_overlay.png" for i in range(4)]

@@ -391,8 +391,9 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, draw=None, b
               help="One JSON object per image and line (JSON Lines) instead of tables.")
 @click.option("--csv", "as_csv", is_flag=True,
               help="CSV instead of tables: a header, then a row per detection (an image with "
-              "none: one row, found false, and in its last column, declined, why the best "
-              "candidate was not reported); lists (flags, matrix, points) as JSON text.")
+              "none: one row, found false, and in its column declined why the best "
+              "candidate was not reported); lists (flags, matrix, points) as JSON text; a "
+              "video's frames: its number in frame (JSON too).")
 @click.option("--out", "-o", type=click.Path(file_okay=False), default=None,
               help="Write pictures per image here: <stem>_overlay.png (detections), "
               "<stem>_accumulator.png (the vote planes; each pattern's when several) and "
@@ -508,7 +509,14 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
 #: shape's, a line's or a curve's: those that do not apply are empty).
 CSV_COLUMNS = ("file", "width", "height", "found", "note", "time_ms", "rank", "pattern", "kind",
                "x", "y", "scale", "angle", "score", "confidence", "nfa", "flags", "line_angle",
-               "line_offset", "width_px", "length", "votes", "matrix", "points", "declined")
+               "line_offset", "width_px", "length", "votes", "matrix", "points", "declined",
+               "frame")
+
+
+def _frame(name: str):
+    """A video frame's number (``"dive.mp4#12"``: 12), else ""."""
+    ref = split_video_ref(name)
+    return "" if ref is None else ref[1]
 
 
 def _csv_line(values) -> str:
@@ -525,17 +533,17 @@ def _csv_rows(name, w, h, note, ms, dets, near=None):
     head = [name, int(w), int(h), "true" if dets else "false", note, round(ms, 3)]
     if not dets:
         why = near.declined if near is not None else ""
-        return [_csv_line(head + [""] * (len(CSV_COLUMNS) - len(head) - 1) + [why])]
+        return [_csv_line(head + [""] * (len(CSV_COLUMNS) - len(head) - 2) + [why, _frame(name)])]
     out = []
     for rank, d in enumerate(dets, 1):
         rec = d.to_dict()
         rec["width_px"] = rec.pop("width", None)   # (a curve's width, not the image's)
         row = head + [rank]
-        for col in CSV_COLUMNS[7:-1]:
+        for col in CSV_COLUMNS[7:-2]:
             v = rec.get(col)
             row.append("" if v is None else json.dumps(v, separators=(",", ":"))
                        if isinstance(v, (list, tuple, dict)) else v)
-        out.append(_csv_line(row + [""]))
+        out.append(_csv_line(row + ["", _frame(name)]))
     return out
 
 
@@ -572,6 +580,8 @@ def _report(outcomes, bar, say, form: str, quiet: bool) -> tuple[int, int]:
                    "note": res.note, "detections": [d.to_dict() for d in dets],
                    "best_declined": None if dets else _best_declined_dict(best_declined(res)),
                    "time_ms": round(ms, 3)}
+            if split_video_ref(name) is not None:
+                rec["frame"] = _frame(name)
             rec.update(written)
             if failed is not None:
                 rec["picture_error"] = str(failed)
