@@ -2,11 +2,7 @@
 
 from __future__ import annotations
 
-import csv
 import inspect
-import io
-import json
-import math
 import os
 import time
 from collections import deque
@@ -18,73 +14,19 @@ from typing import NamedTuple
 import click
 
 from ..config import Config
-from ..core.detector import FLAG_ALONG_LINE, Detector
+from ..core.detector import Detector
 from ..errors import SeahoughError
-from ..geometry import format_angle, format_line
 from ..io.frames import (IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, FrameReader, list_frames, printable,
                          split_video_ref)
 from ._common import (CurveSearch, _Output, _dumps, _max_nfa_callback, _out_dir, _problem,
-                      _progress, _range_callback, _table, bit_depth_option, default_workers,
+                      _progress, _range_callback, bit_depth_option, default_workers,
                       make_detector, workers_option)
+from ._records import (CSV_COLUMNS, _best_declined_dict, _best_declined_line, _csv_line,
+                       _csv_rows, _detection_lines, _frame, best_declined)
 
 # the command's defaults are the library's, so that both give the same results
 _DET = {k: v.default for k, v in inspect.signature(Detector.__init__).parameters.items()}
 _CFG = Config()
-
-
-def _nfa_text(nfa) -> str:
-    """A number of false alarms as the table prints it (``-``: not known).
-
-    >>> _nfa_text(3.2e-05), _nfa_text(0.5), _nfa_text(float("nan"))
-    ('3.2e-05', '5.0e-01', '-')
-    """
-    return f"{nfa:.1e}" if math.isfinite(nfa) else "-"
-
-
-def _curve_lines(curves) -> list[str]:
-    header = ("#", "length", "width", "from", "to", "points", "score", "conf", "nfa", "flags")
-    rows = [(i + 1, f"{c.length:.1f}", f"{c.width:.2f}",
-             f"{c.points[0][0]:.1f},{c.points[0][1]:.1f}",
-             f"{c.points[-1][0]:.1f},{c.points[-1][1]:.1f}", len(c.points), f"{c.score:.2f}",
-             f"{c.confidence:.2f}", _nfa_text(c.nfa), ",".join(c.flags))
-            for i, c in enumerate(curves)]
-    return _table(rows, header)
-
-
-def _line_cells(d) -> tuple[str, str]:
-    """A line detection's direction and offset as the table shows them
-    (:func:`~seahough.geometry.format_line`: the offset's sign follows the
-    direction written)."""
-    angle, offset = format_line(d.line_angle, d.line_offset, 2)
-    return angle, f"{offset:.2f}"
-
-
-def _detection_lines(dets) -> list[str]:
-    if dets and getattr(dets[0], "kind", None) == "curve":
-        return _curve_lines(dets)
-    if any(getattr(d, "pattern", "") for d in dets):   # several patterns: one table
-        header = ("#", "pattern", "x", "y", "scale", "angle", "score", "conf", "nfa", "flags")
-        rows = [(i + 1, d.pattern, f"{d.x:.2f}", f"{d.y:.2f}", f"{d.scale:.3f}",
-                 format_angle(d.line_angle, 2, 180.0) if d.kind == "line"
-                 else format_angle(d.angle, 2),
-                 f"{d.score:.2f}", f"{d.confidence:.2f}", _nfa_text(d.nfa),
-                 ",".join(f for f in d.flags if f != FLAG_ALONG_LINE))
-                for i, d in enumerate(dets)]
-        return _table(rows, header)
-    if dets and dets[0].kind == "line":
-        header = ("#", "line_angle", "offset", "x", "y", "width_scale", "score", "conf", "nfa",
-                  "flags")
-        rows = [(i + 1, *_line_cells(d),
-                 f"{d.x:.2f}", f"{d.y:.2f}", f"{d.scale:.3f}", f"{d.score:.2f}",
-                 f"{d.confidence:.2f}", _nfa_text(d.nfa),
-                 ",".join(f for f in d.flags if f != FLAG_ALONG_LINE))
-                for i, d in enumerate(dets)]
-    else:
-        header = ("#", "x", "y", "scale", "angle", "score", "conf", "nfa", "flags")
-        rows = [(i + 1, f"{d.x:.2f}", f"{d.y:.2f}", f"{d.scale:.3f}", format_angle(d.angle, 2),
-                 f"{d.score:.2f}", f"{d.confidence:.2f}", _nfa_text(d.nfa), ",".join(d.flags))
-                for i, d in enumerate(dets)]
-    return _table(rows, header)
 
 
 def _expand_inputs(images) -> tuple[list[str], dict]:
@@ -105,34 +47,6 @@ def _expand_inputs(images) -> tuple[list[str], dict]:
                 bad[name] = e
         out.append(name)
     return out, bad
-
-
-def best_declined(res):
-    """The best-scoring candidate of a search that was not reported (not
-    merely a repeat of a better one), or None: what a user tunes by."""
-    cands = [c for c in getattr(res, "candidates", None) or ()
-             if c.declined and not c.declined.startswith("the same object")]
-    # (a candidate finished at full resolution before one cut at the coarse scale:
-    # their scores are not measured alike)
-    return max(cands, key=lambda c: (c.full is not None, c.score)) if cands else None
-
-
-def _best_declined_dict(c) -> dict | None:
-    if c is None:
-        return None
-    q = c.pose
-    return {"pattern": c.pattern, "x": float(q.tx), "y": float(q.ty), "scale": float(q.scale),
-            "angle": float(q.angle), "score": float(c.score),
-            "nfa": float(c.nfa) if math.isfinite(c.nfa) else None, "declined": c.declined}
-
-
-def _best_declined_line(c) -> str:
-    q = c.pose
-    name = f"{c.pattern}: " if c.pattern else ""
-    nfa = f", nfa {_nfa_text(c.nfa)}" if math.isfinite(c.nfa) else ""
-    return (f"  best candidate, not reported: {name}x {q.tx:.1f}, y {q.ty:.1f}, scale "
-            f"{q.scale:.3f}, angle {format_angle(q.angle, 1)}, score {c.score:.2f}{nfa}: "
-            f"{c.declined}")
 
 
 def _picture_stem(name: str, out_dir, stems: dict) -> str | None:
@@ -503,48 +417,6 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     if n_bad:
         return 2
     return 1 if n_missing else 0
-
-
-#: The columns of ``detect --csv``: the image's, then a detection's (a
-#: shape's, a line's or a curve's: those that do not apply are empty).
-CSV_COLUMNS = ("file", "width", "height", "found", "note", "time_ms", "rank", "pattern", "kind",
-               "x", "y", "scale", "angle", "score", "confidence", "nfa", "flags", "line_angle",
-               "line_offset", "width_px", "length", "votes", "matrix", "points", "declined",
-               "frame")
-
-
-def _frame(name: str):
-    """A video frame's number (``"dive.mp4#12"``: 12), else ""."""
-    ref = split_video_ref(name)
-    return "" if ref is None else ref[1]
-
-
-def _csv_line(values) -> str:
-    """One CSV row without its line end (a field holding a line break quoted)."""
-    buf = io.StringIO()
-    csv.writer(buf, lineterminator="\r\n").writerow(values)
-    return buf.getvalue()[:-2]
-
-
-def _csv_rows(name, w, h, note, ms, dets, near=None):
-    """The CSV lines of one image (:data:`CSV_COLUMNS`); ``near``: the best
-    declined candidate of an image without detections (its row's
-    ``declined``: why it was not reported)."""
-    head = [name, int(w), int(h), "true" if dets else "false", note, round(ms, 3)]
-    if not dets:
-        why = near.declined if near is not None else ""
-        return [_csv_line(head + [""] * (len(CSV_COLUMNS) - len(head) - 2) + [why, _frame(name)])]
-    out = []
-    for rank, d in enumerate(dets, 1):
-        rec = d.to_dict()
-        rec["width_px"] = rec.pop("width", None)   # (a curve's width, not the image's)
-        row = head + [rank]
-        for col in CSV_COLUMNS[7:-2]:
-            v = rec.get(col)
-            row.append("" if v is None else json.dumps(v, separators=(",", ":"))
-                       if isinstance(v, (list, tuple, dict)) else v)
-        out.append(_csv_line(row + ["", _frame(name)]))
-    return out
 
 
 def _report(outcomes, bar, say, form: str, quiet: bool) -> tuple[int, int]:
