@@ -58,8 +58,26 @@ def reference_ms(repeat: int = 50) -> float:
     return float(numpy.median(times[1:]))
 
 
+def _shown(arg: str) -> str:
+    """A command-line argument as a page shows it: an absolute path (or
+    ``--opt=/path``) outside the working folder by its file name alone, so
+    that no machine's paths land in the repository."""
+    opt, eq, value = arg.partition("=") if arg.startswith("--") else ("", "", arg)
+    if not os.path.isabs(value):
+        return arg
+    rel = os.path.relpath(value)
+    value = rel if not rel.startswith("..") else os.path.basename(value.rstrip("/\\"))
+    return f"{opt}{eq}{value}"
+
+
 def command() -> str:
-    return "python " + " ".join([os.path.relpath(sys.argv[0])] + sys.argv[1:])
+    """The command that made a page, as run (paths as :func:`_shown` shows them).
+
+    >>> sys.argv = ["bench/x.py", "--cache", "/tmp/run/rs.cache", "--out=/tmp/r.md", "--n", "4"]
+    >>> command()
+    'python bench/x.py --cache rs.cache --out=r.md --n 4'
+    """
+    return "python " + " ".join([os.path.relpath(sys.argv[0])] + [_shown(a) for a in sys.argv[1:]])
 
 
 def steady_allocator() -> str:

@@ -549,3 +549,16 @@ def test_nfa_fit_reads_the_evidence_and_keeps_the_promise():
     assert gap < 1e-9, out
     assert json.loads(re.search(r"fit (.+)", out).group(1)) == [8.0, -2.0], out
     assert "band True False" in out, out
+
+
+def test_a_page_s_command_names_no_machine_path(tmp_path):
+    """A benchmark page's Command line shows an absolute path given on the
+    command line (a cache, an output) by its file name: a page once carried
+    /tmp/... into the repository."""
+    out = run_bench_code(
+        "import sys, _common\n"
+        f"sys.argv = ['bench/bench_robosub.py', '--write', '--cache', {str(tmp_path / 'rs.cache')!r},"
+        f" '--out={tmp_path / 'page.md'}', 'bench/peers.py']\n"
+        "print(_common.command())", timeout=60)
+    assert out.strip() == ("python bench/bench_robosub.py --write --cache rs.cache --out=page.md "
+                           "bench/peers.py")
