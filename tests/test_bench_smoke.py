@@ -140,7 +140,7 @@ def test_odometry_drift_by_frame_size_runs():
         assert keys == 7 if policy == "every frame" else 1 <= keys <= 7
 
 
-@pytest.mark.skipif(not (DATA / "sequences" / "sparus_auv_seabed").is_dir(),
+@pytest.mark.skipif(DATA is None or not (DATA / "sequences" / "sparus_auv_seabed").is_dir(),
                     reason="needs ../shared/data/sequences")
 def test_survey_joins_benchmark_quick():
     """bench/bench_survey_joins.py --quick: a chunked dead reckoning against one run."""

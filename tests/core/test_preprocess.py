@@ -15,8 +15,9 @@ import numpy as np
 import pytest
 
 from seahough.config import Config
-from seahough.core.preprocess import (blank_border, choose_factor, colour_metric, compute_gradients,
-                                      fill_blank_border, scale_image)
+from seahough.core.blanks import blank_border, caption_boxes, fill_blank_border, fill_blanks, find_blanks
+from seahough.core.preprocess import (choose_factor, colour_metric, compute_gradients,
+                                      scale_image)
 
 
 def _direction(g, y, x):

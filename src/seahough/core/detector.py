@@ -25,7 +25,8 @@ from .accumulator import (AccumulatorPlanes, accumulate, check_ranges, edge_gap,
 from .candidates import PoseComparison, SearchContext, find_candidates
 from .features import Features, extract_features
 from .pattern import Pattern
-from .preprocess import blank_border, choose_factor, prepare_image
+from .blanks import find_blanks
+from .preprocess import choose_factor, prepare_image
 from .ranking import (FLAG_ALONG_LINE, FLAG_AMBIGUOUS, FLAG_GREY, FLAG_OUTSIDE_RANGE,
                       FLAG_PARTIAL, FLAG_RANGE_EDGE, Detection, confidence, line_parameters, rank)
 
@@ -422,9 +423,9 @@ class Detector:
                               max_memory_mb=cfg.max_memory_mb, bit_depth=cfg.bit_depth)
                   for c in kinds}
         if features is None:
-            # (one border for the grey and the colour copy: the grey one's)
-            box = blank_border(images[min(images)])
-            images = {c: prepare_image(img, cfg, box) for c, img in images.items()}
+            # (the grey and the colour copy filled alike: as the grey one's blanks)
+            blanks = find_blanks(images[min(images)])
+            images = {c: prepare_image(img, cfg, blanks) for c, img in images.items()}
         # each pattern, and the image it is searched in (a grey image has no colour
         # to see: a painted pattern's grey edges then, as searched alone)
         work = {}

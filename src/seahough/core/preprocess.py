@@ -8,6 +8,7 @@ import cv2
 import numpy as np
 
 from ..config import Config
+from .blanks import Blanks, fill_blanks
 
 
 @dataclass
@@ -76,120 +77,18 @@ def choose_factor(shape: tuple[int, int], config: Config,
     return float(f)
 
 
-#: a frame's outermost line is blank (a video's letterbox bar, a camera's
-#: black or grey band) when its levels vary by less than this standard
-#: deviation (0-255 levels): the black bars of the RoboSub pool videos have
-#: 0.5-1.0 (JPEG noise), a flat grey band 0; the darkest vignetted border
-#: of the real sequences (the amphora wreck's corners) 6.7, textured sand
-#: more. Only lines all flat count: a dark border with texture is content.
-BLANK_STD = 2.0
-#: at most this share of each side is taken for a blank border (a side
-#: flat farther in: no border, the picture's own flat background)
-BLANK_DEPTH = 0.25
-#: ... and only when the picture beyond it departs from the band's level by
-#: this many levels (within that quarter) all along the side, at least at
-#: this share of its length: a drawn scene's flat background, level with
-#: the band beside an object, is no border (the object stays as it is).
-#: All 102 bordered RoboSub test frames pass; no tune photo has such a border.
-BLANK_STEP = 10.0
-BLANK_ALONG = 0.98
-#: ... and this share of it within the first lines beyond the band (a bar's
-#: edge is a step; the flat open water at the top of a pool photo fades,
-#: and its objects break it over a fifth of the width)
-BLANK_STEP_SHARE = 0.75
-#: lines beyond a blank border left out too: the JPEG-smeared line between
-#: bar and content (RoboSub: a column at 43 between 0 and 82)
-BLANK_MARGIN = 2
-
-
-def blank_border(gray: np.ndarray) -> tuple[int, int, int, int]:
-    """(x0, y0, x1, y1), end exclusive: the image without its blank border
-    (flat lines at an edge: letterbox bars, a uniform band, beyond which the
-    picture departs from their level all along the side, :data:`BLANK_STEP`) and
-    :data:`BLANK_MARGIN` lines more on each side that has one; the whole
-    image when it has none, or when they would leave less than half of it.
-
-    Examples
-    --------
-    >>> img = np.random.default_rng(0).uniform(60, 200, (60, 80)).astype(np.float32)
-    >>> img[:, :6] = 0                               # a letterbox bar
-    >>> blank_border(img)
-    (8, 0, 80, 60)
-    """
-    g = gray
-    h, w = g.shape[:2]
-    colour = g.ndim == 3
-
-    def grey(a: np.ndarray) -> np.ndarray:      # (a colour image's lines only, not all of it)
-        return a.mean(axis=-1) if colour else a
-
-    def depth(lines: np.ndarray) -> int:
-        # lines: the side's outermost lines as rows, outermost first (most
-        # images: the first alone decides)
-        if lines.shape[0] == 0 or grey(lines[0]).std() >= BLANK_STD:
-            return 0
-        lines = grey(lines)
-        flat = lines.std(axis=1) < BLANK_STD
-        if flat.all():                # a quarter of the side flat: a scene's background
-            return 0
-        n = int(np.argmin(flat))
-        # a bar runs the whole side: beyond it, the picture departs from the band's
-        # level all along (a drawn scene's flat background, level with the band, does
-        # not where it passes beside an object)
-        off = np.abs(lines[n:] - float(lines[n - 1].mean())) >= BLANK_STEP
-        # ... and at once: a bar's edge is a step, open water fades from its level
-        if (off.any(axis=0).mean() < BLANK_ALONG
-                or off[:BLANK_MARGIN + 2].any(axis=0).mean() < BLANK_STEP_SHARE):
-            return 0
-        return n + BLANK_MARGIN
-
-    ly, lx = int(h * BLANK_DEPTH), int(w * BLANK_DEPTH)
-    top, bottom = depth(g[:ly]), depth(g[h - ly:][::-1])
-    left = depth(np.swapaxes(g[:, :lx], 0, 1))
-    right = depth(np.swapaxes(g[:, w - lx:][:, ::-1], 0, 1))
-    if not (top or bottom or left or right):
-        return (0, 0, w, h)
-    box = (left, top, w - right, h - bottom)
-    if box[2] - box[0] < w // 2 or box[3] - box[1] < h // 2:
-        return (0, 0, w, h)
-    return box
-
-
-def fill_blank_border(image: np.ndarray, box=None) -> np.ndarray:
-    """``image`` with its :func:`blank_border` replaced by its content's
-    outermost lines repeated outwards, so that the step between a letterbox
-    bar and the picture is no edge (a post, a line, a rope along the frame
-    on every video frame); the same array when it has none. Positions are
-    unchanged. ``box``: that border, already found (the grey and colour
-    copies of one image filled alike).
-
-    Examples
-    --------
-    >>> img = np.random.default_rng(0).uniform(60, 200, (60, 80)).astype(np.float32)
-    >>> img[:, :6] = 0
-    >>> out = fill_blank_border(img)
-    >>> bool((out[:, :8] == out[:, 8:9]).all()), out.shape
-    (True, (60, 80))
-    """
-    h, w = image.shape[:2]
-    x0, y0, x1, y1 = blank_border(image) if box is None else box
-    if (x0, y0, x1, y1) == (0, 0, w, h):
-        return image
-    return cv2.copyMakeBorder(image[y0:y1, x0:x1], y0, h - y1, x0, w - x1, cv2.BORDER_REPLICATE)
-
-
-def prepare_image(image: np.ndarray, config: Config, box=None) -> np.ndarray:
-    """A searched image as the search sees it: its blank border filled
-    (:func:`fill_blank_border`; ``box``: that border already found) and,
-    with ``Config.smooth``, blurred by that Gaussian sigma (speckle, grain).
-    Positions are unchanged.
+def prepare_image(image: np.ndarray, config: Config, blanks: Blanks | None = None) -> np.ndarray:
+    """A searched image as the search sees it: what is not the scene filled
+    (:func:`~.blanks.fill_blanks`: a letterbox border, burned-in captions;
+    ``blanks``: those already found) and, with ``Config.smooth``, blurred by
+    that Gaussian sigma (speckle, grain). Positions are unchanged.
 
     >>> img = np.zeros((40, 60), np.float32); img[:, 30:] = 200
     >>> out = prepare_image(img, Config(smooth=2.0))
     >>> float(out[20, 29]) > 0 and float(out[20, 30]) < 200
     True
     """
-    image = fill_blank_border(image, box)
+    image = fill_blanks(image, blanks)
     if config.smooth > 0:
         image = cv2.GaussianBlur(np.ascontiguousarray(image, np.float32), (0, 0), config.smooth,
                                  borderType=cv2.BORDER_REPLICATE)

@@ -1,0 +1,298 @@
+"""What in a frame is not the scene: a video's blank border (letterbox bars,
+a uniform band) and burned-in captions (a timestamp or frame counter on a
+flat box at an edge), found so that the search does not take their edges for
+objects (:func:`find_blanks`), and filled from the picture beside them
+(:func:`fill_blanks`). Positions are unchanged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+def _grey(image: np.ndarray, colour: bool | None = None) -> np.ndarray:
+    """A colour image's mean of its channels (numpy's mean over the last
+    axis took 5 ms for a 640x480 photo), a grey one as it is; ``colour``:
+    whether the last axis holds channels (None: when there are three axes)."""
+    if not (image.ndim == 3 if colour is None else colour):
+        return image
+    c = image.astype(np.float32, copy=False)
+    return (c[..., 0] + c[..., 1] + c[..., 2]) * np.float32(1.0 / 3.0)
+
+
+#: a frame's outermost line is blank (a video's letterbox bar, a camera's
+#: black or grey band) when its levels vary by less than this standard
+#: deviation (0-255 levels): the black bars of the RoboSub pool videos have
+#: 0.5-1.0 (JPEG noise), a flat grey band 0; the darkest vignetted border
+#: of the real sequences (the amphora wreck's corners) 6.7, textured sand
+#: more. Only lines all flat count: a dark border with texture is content.
+BLANK_STD = 2.0
+#: at most this share of each side is taken for a blank border (a side
+#: flat farther in: no border, the picture's own flat background)
+BLANK_DEPTH = 0.25
+#: ... and only when the picture beyond it departs from the band's level by
+#: this many levels (within that quarter) all along the side, at least at
+#: this share of its length: a drawn scene's flat background, level with
+#: the band beside an object, is no border (the object stays as it is).
+#: All 102 bordered RoboSub test frames pass; no tune photo has such a border.
+BLANK_STEP = 10.0
+BLANK_ALONG = 0.98
+#: ... and this share of it within the first lines beyond the band (a bar's
+#: edge is a step; the flat open water at the top of a pool photo fades,
+#: and its objects break it over a fifth of the width)
+BLANK_STEP_SHARE = 0.75
+#: lines beyond a blank border left out too: the JPEG-smeared line between
+#: bar and content (RoboSub: a column at 43 between 0 and 82)
+BLANK_MARGIN = 2
+
+
+def blank_border(gray: np.ndarray) -> tuple[int, int, int, int]:
+    """(x0, y0, x1, y1), end exclusive: the image without its blank border
+    (flat lines at an edge: letterbox bars, a uniform band, beyond which the
+    picture departs from their level all along the side, :data:`BLANK_STEP`) and
+    :data:`BLANK_MARGIN` lines more on each side that has one; the whole
+    image when it has none, or when they would leave less than half of it.
+
+    Examples
+    --------
+    >>> img = np.random.default_rng(0).uniform(60, 200, (60, 80)).astype(np.float32)
+    >>> img[:, :6] = 0                               # a letterbox bar
+    >>> blank_border(img)
+    (8, 0, 80, 60)
+    """
+    g = gray
+    h, w = g.shape[:2]
+    colour = g.ndim == 3
+
+    def grey(a: np.ndarray) -> np.ndarray:      # (a colour image's lines only, not all of it)
+        return _grey(a, colour)
+
+    def depth(lines: np.ndarray) -> int:
+        # lines: the side's outermost lines as rows, outermost first (most
+        # images: the first alone decides)
+        if lines.shape[0] == 0 or grey(lines[0]).std() >= BLANK_STD:
+            return 0
+        lines = grey(lines)
+        flat = lines.std(axis=1) < BLANK_STD
+        if flat.all():                # a quarter of the side flat: a scene's background
+            return 0
+        n = int(np.argmin(flat))
+        # a bar runs the whole side: beyond it, the picture departs from the band's
+        # level all along (a drawn scene's flat background, level with the band, does
+        # not where it passes beside an object)
+        off = np.abs(lines[n:] - float(lines[n - 1].mean())) >= BLANK_STEP
+        # ... and at once: a bar's edge is a step, open water fades from its level
+        if (off.any(axis=0).mean() < BLANK_ALONG
+                or off[:BLANK_MARGIN + 2].any(axis=0).mean() < BLANK_STEP_SHARE):
+            return 0
+        return n + BLANK_MARGIN
+
+    ly, lx = int(h * BLANK_DEPTH), int(w * BLANK_DEPTH)
+    top, bottom = depth(g[:ly]), depth(g[h - ly:][::-1])
+    left = depth(np.swapaxes(g[:, :lx], 0, 1))
+    right = depth(np.swapaxes(g[:, w - lx:][:, ::-1], 0, 1))
+    if not (top or bottom or left or right):
+        return (0, 0, w, h)
+    box = (left, top, w - right, h - bottom)
+    if box[2] - box[0] < w // 2 or box[3] - box[1] < h // 2:
+        return (0, 0, w, h)
+    return box
+
+
+def fill_blank_border(image: np.ndarray, box=None) -> np.ndarray:
+    """``image`` with its :func:`blank_border` replaced by its content's
+    outermost lines repeated outwards, so that the step between a letterbox
+    bar and the picture is no edge (a post, a line, a rope along the frame
+    on every video frame); the same array when it has none. Positions are
+    unchanged. ``box``: that border, already found (the grey and colour
+    copies of one image filled alike).
+
+    Examples
+    --------
+    >>> img = np.random.default_rng(0).uniform(60, 200, (60, 80)).astype(np.float32)
+    >>> img[:, :6] = 0
+    >>> out = fill_blank_border(img)
+    >>> bool((out[:, :8] == out[:, 8:9]).all()), out.shape
+    (True, (60, 80))
+    """
+    h, w = image.shape[:2]
+    x0, y0, x1, y1 = blank_border(image) if box is None else box
+    if (x0, y0, x1, y1) == (0, 0, w, h):
+        return image
+    return cv2.copyMakeBorder(image[y0:y1, x0:x1], y0, h - y1, x0, w - x1, cv2.BORDER_REPLICATE)
+
+
+#: a burned-in caption's box: a connected region of flat levels, dark (at
+#: most CAPTION_DARK) or light (at least CAPTION_LIGHT), CAPTION_FLAT of it
+#: within CAPTION_LEVELS of its median (the RoboSub pool videos' timestamp
+#: box: 0-5, JPEG noise; the glyphs' smeared edges are the rest),
+#: touching an edge of the picture (within CAPTION_TOUCH px of it), wide (at
+#: least CAPTION_ASPECT times as wide as high, a line of text), at most
+#: CAPTION_HEIGHT of the image high and CAPTION_AREA of it in all, covering
+#: more than CAPTION_FILL of its bounding box, with text inside: at least
+#: CAPTION_TEXT of that box at the far end of the levels (at least
+#: CAPTION_INK levels from the box's)
+CAPTION_DARK, CAPTION_LIGHT = 40.0, 215.0
+CAPTION_LEVELS = 6.0
+CAPTION_FLAT = 0.7
+CAPTION_TOUCH = 3
+CAPTION_ASPECT = 3.0
+CAPTION_HEIGHT = 0.1
+CAPTION_AREA = 0.05
+CAPTION_FILL = 0.5
+CAPTION_TEXT = 0.03
+CAPTION_INK = 120.0
+CAPTION_MIN_PIXELS = 100
+#: lines around a caption filled too (JPEG smear of its edge)
+CAPTION_MARGIN = 2
+
+
+@dataclass(frozen=True)
+class Caption:
+    """A burned-in caption's box (end exclusive, margin included) and the
+    side of the picture it touches, from which it is filled."""
+
+    side: str
+    x0: int
+    y0: int
+    x1: int
+    y1: int
+
+
+@dataclass(frozen=True)
+class Blanks:
+    """What :func:`fill_blanks` fills: ``border`` the picture without its
+    blank border (x0, y0, x1, y1, end exclusive; :func:`blank_border`) and
+    the burned-in ``captions`` inside it (:func:`caption_boxes`)."""
+
+    border: tuple[int, int, int, int]
+    captions: tuple[Caption, ...] = ()
+
+
+def caption_boxes(image: np.ndarray, border=None) -> tuple[Caption, ...]:
+    """The burned-in captions of a frame (grey or colour, levels 0-255):
+    flat dark or light boxes at an edge of the picture (``border``: its
+    :func:`blank_border`, found when None) holding a line of text, as an
+    ROV's video overlay prints its timestamp. A scene's own dark or light
+    areas are not flat enough, not that wide at an edge, or hold no text.
+
+    Examples
+    --------
+    >>> img = np.random.default_rng(0).uniform(60, 200, (160, 240)).astype(np.float32)
+    >>> img[:14, :90] = 0                          # a black box in the top left corner ...
+    >>> img[4:10, 5:85:6] = 230                    # ... with white text in it
+    >>> caption_boxes(img)
+    (Caption(side='top', x0=0, y0=0, x1=92, y1=16),)
+    """
+    h, w = image.shape[:2]
+    x0, y0, x1, y1 = blank_border(image) if border is None else border
+    t = CAPTION_TOUCH
+    deep = min(t + int(CAPTION_HEIGHT * h) + 1, y1 - y0)
+    # where a caption may lie: a band along the top or the bottom (most
+    # overlays), or the rows beside a run of an edge's flat levels for one at
+    # the left or right; each searched only when the picture's outermost lines
+    # hold such levels there (a photo is read in these bands alone)
+    edges = {"top": (x0, y0, x1, y0 + t + 1), "bottom": (x0, y1 - t - 1, x1, y1),
+             "left": (x0, y0, x0 + t + 1, y1), "right": (x1 - t - 1, y0, x1, y1)}
+    found = set()
+    for dark in (True, False):
+        done: list = []
+        for edge, (ex0, ey0, ex1, ey1) in edges.items():
+            e = _grey(image[ey0:ey1, ex0:ex1])
+            hit = (e <= CAPTION_DARK) if dark else (e >= CAPTION_LIGHT)
+            if not hit.any():
+                continue
+            if edge == "top":
+                regions = [(x0, y0, x1, y0 + deep)]
+            elif edge == "bottom":
+                regions = [(x0, y1 - deep, x1, y1)]
+            else:   # each run of such rows no taller than a caption, and a margin
+                rows = np.flatnonzero(hit.any(axis=1))
+                cuts = np.flatnonzero(np.diff(rows) > 1)
+                regions = [(x0, max(y0, ey0 + int(a) - t - 1), x1, min(y1, ey0 + int(b) + t + 2))
+                           for a, b in zip(rows[np.r_[0, cuts + 1]], rows[np.r_[cuts, -1]])
+                           if b - a < deep]
+            for region in regions:
+                if not any(r[1] <= region[1] and region[3] <= r[3] for r in done):
+                    found |= _captions_in(image, region, (x0, y0, x1, y1), dark)
+                    done.append(region)   # (a region within one already read: skipped)
+    return tuple(sorted(found, key=lambda c: (c.y0, c.x0)))
+
+
+def _captions_in(image: np.ndarray, region, border, dark: bool) -> set:
+    """The captions of :func:`caption_boxes` (dark or light boxes) whose box
+    lies in ``region`` (x0, y0, x1, y1) of the picture ``border``."""
+    h, w = image.shape[:2]
+    rx0, ry0, rx1, ry1 = region
+    x0, y0, x1, y1 = border
+    sub = _grey(image[ry0:ry1, rx0:rx1])
+    mask = (sub <= CAPTION_DARK) if dark else (sub >= CAPTION_LIGHT)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask.view(np.uint8), connectivity=8)
+    out = set()
+    t, m = CAPTION_TOUCH, CAPTION_MARGIN
+    x_, y_, bw_, bh_, area_ = stats[1:].T.astype(np.int64)
+    ok = ((area_ >= CAPTION_MIN_PIXELS) & (bw_ >= CAPTION_ASPECT * bh_)
+          & (bh_ <= CAPTION_HEIGHT * h) & (bw_ * bh_ <= CAPTION_AREA * h * w)
+          & (area_ > CAPTION_FILL * bw_ * bh_)
+          & ~((y_ == 0) & (ry0 > y0)) & ~((y_ + bh_ == ry1) & (ry1 < y1)))  # (cut by a band)
+    for i in np.flatnonzero(ok) + 1:
+        x, y, bw, bh = (int(v) for v in stats[i, :4])
+        box = sub[y:y + bh, x:x + bw]
+        level = box[labels[y:y + bh, x:x + bw] == i]
+        mid = float(np.median(level))
+        if np.mean(np.abs(level - mid) <= CAPTION_LEVELS) < CAPTION_FLAT:
+            continue
+        ink = (box >= mid + CAPTION_INK) if dark else (box <= mid - CAPTION_INK)
+        if ink.mean() < CAPTION_TEXT:
+            continue
+        x, y = x + rx0, y + ry0
+        side = ("top" if y <= y0 + t else "bottom" if y + bh >= y1 - t else
+                "left" if x <= x0 + t else "right" if x + bw >= x1 - t else "")
+        if side:
+            out.add(Caption(side, max(x - m, x0), max(y - m, y0), min(x + bw + m, x1),
+                            min(y + bh + m, y1)))
+    return out
+
+
+def find_blanks(image: np.ndarray) -> Blanks:
+    """The :class:`Blanks` of a frame (grey or colour, levels 0-255).
+
+    >>> img = np.random.default_rng(0).uniform(60, 200, (60, 80)).astype(np.float32)
+    >>> img[:, :6] = 0
+    >>> find_blanks(img)
+    Blanks(border=(8, 0, 80, 60), captions=())
+    """
+    border = blank_border(image)
+    return Blanks(border, caption_boxes(image, border))
+
+
+def fill_blanks(image: np.ndarray, blanks: Blanks | None = None) -> np.ndarray:
+    """``image`` with its :class:`Blanks` (found when None) filled from the
+    picture beside them: a caption's box from the line just beyond it,
+    repeated towards the edge it touches, then the blank border
+    (:func:`fill_blank_border`). The same array when there is nothing to
+    fill; else a copy.
+
+    >>> img = np.random.default_rng(0).uniform(60, 200, (160, 240)).astype(np.float32)
+    >>> img[:14, :90] = 0
+    >>> img[4:10, 5:85:6] = 230
+    >>> out = fill_blanks(img)
+    >>> bool((out[:16, :92] == out[16, :92]).all()), bool((out[16:] == img[16:]).all())
+    (True, True)
+    """
+    blanks = find_blanks(image) if blanks is None else blanks
+    if blanks.captions:
+        image = image.copy()
+        bx0, by0, bx1, by1 = blanks.border
+        for c in blanks.captions:
+            if c.side == "top" and c.y1 < by1:
+                image[by0:c.y1, c.x0:c.x1] = image[c.y1:c.y1 + 1, c.x0:c.x1]
+            elif c.side == "bottom" and c.y0 > by0:
+                image[c.y0:by1, c.x0:c.x1] = image[c.y0 - 1:c.y0, c.x0:c.x1]
+            elif c.side == "left" and c.x1 < bx1:
+                image[c.y0:c.y1, bx0:c.x1] = image[c.y0:c.y1, c.x1:c.x1 + 1]
+            elif c.side == "right" and c.x0 > bx0:
+                image[c.y0:c.y1, c.x0:bx1] = image[c.y0:c.y1, c.x0 - 1:c.x0]
+    return fill_blank_border(image, blanks.border)

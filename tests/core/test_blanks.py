@@ -1,0 +1,144 @@
+"""Burned-in captions (a video overlay's timestamp on a flat box at an edge):
+found, filled, and not confused with the scene's own dark or light areas.
+(The blank border's tests are in test_preprocess.py.)"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+import seahough
+from seahough.core import blanks as B
+from seahough.core.blanks import Caption, caption_boxes, fill_blanks, find_blanks
+
+from conftest import data_path
+
+
+def _scene(h=240, w=320, seed=0):
+    return np.random.default_rng(seed).uniform(60, 200, (h, w)).astype(np.float32)
+
+
+def _caption(img, x, y, w=120, h=16, box=0.0, ink=235.0):
+    """A flat box of level ``box`` at (x, y) with a line of round 'glyphs'
+    (small discs) of level ``ink`` in it."""
+    img[y:y + h, x:x + w] = box
+    for cx in range(x + 8, x + w - 6, 14):
+        cv2.circle(img, (cx, y + h // 2), 4, float(ink), -1, cv2.LINE_AA)
+    return img
+
+
+@pytest.mark.parametrize("where,side", [((0, 0), "top"), ((200, 0), "top"),
+                                        ((0, 224), "bottom"), ((0, 100), "left"),
+                                        ((200, 110), "right")])
+def test_a_caption_at_any_edge_is_found_and_filled_from_beside_it(where, side):
+    img = _caption(_scene(), *where)
+    x, y = where
+    caps = caption_boxes(img)
+    assert caps == (Caption(side, max(x - 2, 0), max(y - 2, 0), min(x + 122, 320),
+                            min(y + 18, 240)),)
+    out = fill_blanks(img)
+    c = caps[0]
+    inside = out[c.y0:c.y1, c.x0:c.x1]
+    # filled: the box's lines all repeat the picture's line beside it (no step, no text)
+    if side in ("top", "bottom"):
+        beside = img[c.y1, c.x0:c.x1] if side == "top" else img[c.y0 - 1, c.x0:c.x1]
+        assert (inside == beside[None, :]).all()
+    else:
+        beside = img[c.y0:c.y1, c.x1] if side == "left" else img[c.y0:c.y1, c.x0 - 1]
+        assert (inside == beside[:, None]).all()
+    rest = np.ones(img.shape, bool)
+    rest[c.y0:c.y1, c.x0:c.x1] = False
+    assert (out[rest] == img[rest]).all()                     # the picture untouched
+    assert (img == _caption(_scene(), *where)).all()          # (the input not changed)
+
+
+def test_a_light_caption_with_dark_text_and_a_colour_frame():
+    img = _caption(_scene(), 0, 0, box=245.0, ink=10.0)
+    assert [c.side for c in caption_boxes(img)] == ["top"]
+    colour = np.dstack([img, img * 0.9, img * 0.8]).astype(np.float32)
+    colour[:16, :120] = (250, 250, 250)
+    for cx in range(7, 114, 10):
+        cv2.circle(colour, (cx, 8), 4, (0, 0, 0), 1, cv2.LINE_AA)
+    blanks = find_blanks(colour)
+    assert [c.side for c in blanks.captions] == ["top"]
+    out = fill_blanks(colour, blanks)
+    assert out.shape == colour.shape and float(out[:18, :122].min()) > 40
+
+
+def test_a_caption_beside_a_letterbox_bar():
+    """A timestamp box touching a video's black bar (the RoboSub frames): the
+    bar is the border, the box a caption inside it; both filled."""
+    img = _scene(360, 480)
+    img[:, :6] = 0.7
+    _caption(img, 6, 0, h=14)
+    blanks = find_blanks(img)
+    assert blanks.border == (8, 0, 480, 360)
+    assert blanks.captions == (Caption("top", 8, 0, 128, 16),)
+    out = fill_blanks(img, blanks)
+    assert float(out[:16, :130].min()) > 40 and float(out[:, :8].min()) > 40
+
+
+def test_what_is_not_a_caption():
+    # a flat dark band at an edge with nothing in it (a shadow, a bar)
+    img = _scene()
+    img[:16, :120] = 0
+    assert caption_boxes(img) == ()
+    # a box with text away from every edge (a sign in the scene)
+    assert caption_boxes(_caption(_scene(), 100, 100)) == ()
+    # a dark area at an edge that is textured, not flat (rock in shadow)
+    img = _caption(_scene(), 0, 0)
+    img[:16, :120] += np.random.default_rng(3).uniform(0, 30, (16, 120)).astype(np.float32)
+    assert caption_boxes(img) == ()
+    # too tall for a line of text
+    assert caption_boxes(_caption(_scene(), 0, 0, w=120, h=60)) == ()
+    # a drawn scene: black ground, white shapes, one of them at an edge
+    drawn = np.zeros((240, 320), np.float32)
+    drawn[0:30, 40:200] = 255
+    cv2.circle(drawn, (160, 140), 30, 255.0, -1)
+    assert find_blanks(drawn).captions == ()
+    assert fill_blanks(drawn) is drawn                        # (no copy)
+
+
+def _discs(img, n=3, r=9):
+    """Bright discs (the searched objects) in the scene's lower half."""
+    for i in range(n):
+        cv2.circle(img, (60 + 90 * i, 170), r, 250.0, -1, cv2.LINE_AA)
+    return img
+
+
+def test_a_caption_s_digits_are_not_found_as_objects(monkeypatch):
+    """Discs searched in a frame with a timestamp of round glyphs: no
+    candidate lies in the caption (its glyphs took candidate slots before),
+    and the scene's discs are found. Control: with the captions left in, the
+    glyphs are candidates, so the test can fail."""
+    img = cv2.GaussianBlur(_discs(_caption(_scene(seed=4) * 0.3 + 60, 0, 0, w=160, h=18)),
+                           (0, 0), 0.7)
+    det = seahough.Detector(seahough.Pattern.circle(5, polarity="either"),
+                            scale_range=(0.6, 2.5), max_results=8)
+
+    def in_caption(c):   # (a candidate that fits a glyph: the filled box's streaks fit none)
+        return c.fit.pose.ty < 22 and c.fit.pose.tx < 165 and c.fit.score >= 0.6
+
+    res = det.search(img)
+    assert not any(in_caption(c) for c in res.candidates)
+    assert sorted(round(d.y) for d in res.detections) == [170, 170, 170]
+    monkeypatch.setattr(B, "caption_boxes", lambda image, border=None: ())
+    assert sum(in_caption(c) for c in det.search(img).candidates) >= 3
+
+
+def test_real_video_captions():
+    """The RoboSub pool videos' timestamp box (top left, beside the
+    letterbox bar) is found; no caption in real photos that have none."""
+    frame = cv2.imread(str(data_path("objects", "robosub_transdec", "images", "1032.jpg")))
+    blanks = find_blanks(frame.astype(np.float32))
+    assert blanks.border == (6, 0, 485, 360)
+    (c,) = blanks.captions                       # (x0: 6 or 7 by the JPEG decoder)
+    assert (c.side, c.y0, c.x1, c.y1) == ("top", 0, 149, 19) and c.x0 in (6, 7)
+    for parts in (("objects", "robosub_transdec", "images", "1375.jpg"),
+                  ("sequences", "sparus_auv_seabed"), ("sequences", "aqualoc_amphorae_wreck")):
+        p = data_path(*parts)
+        files = [p] if p.is_file() else sorted(p.glob("*.png")) + sorted(p.glob("*.jpg"))
+        for f in files[:6]:
+            img = cv2.imread(str(f))
+            assert caption_boxes(img.astype(np.float32)) == (), f
