@@ -100,6 +100,50 @@ def test_what_is_not_a_caption():
     assert fill_blanks(drawn) is drawn                        # (no copy)
 
 
+@pytest.mark.parametrize("case", ["valid", "narrow", "tall", "large", "small", "away",
+                                  "blob", "no text", "textured"])
+def test_each_rule_of_a_caption(case):
+    """A valid caption, then each of its rules broken alone: no caption."""
+    img = _scene()
+    box = dict(valid=(0, 0, 120, 16), narrow=(0, 0, 40, 16), tall=(0, 0, 100, 30),
+               large=(0, 0, 280, 15), small=(0, 0, 15, 5), away=(5, 5, 120, 16))
+    if case in box:
+        x, y, w, h = box[case]
+        _caption(img, x, y, w, h)
+        if case == "small":
+            img[2, 3:12:3] = 235.0                      # (its 'text')
+    elif case == "blob":       # a flat dark half disc cut by the top edge, the scene beside it
+        cv2.ellipse(img, (60, 0), (60, 16), 0, 0, 180, 0.0, -1)
+    elif case == "no text":
+        img[:16, :120] = 0.0
+    else:
+        _caption(img, 0, 0)
+        img[:16, :120] += np.random.default_rng(3).uniform(0, 30, (16, 120)).astype(np.float32)
+    assert bool(caption_boxes(img)) == (case == "valid")
+
+
+def test_two_stacked_captions_are_filled_as_one():
+    """A two-line overlay on two boxes a pixel apart: one box, filled from
+    beyond both (a review found the first filled from the second)."""
+    img = _caption(_caption(_scene(), 0, 0, 120, 14), 0, 15, 90, 14)
+    (c,) = caption_boxes(img)
+    assert (c.side, c.x0, c.y0, c.x1, c.y1) == ("top", 0, 0, 122, 31)
+    out = fill_blanks(img)
+    assert float(out[:31, :122].min()) > 40
+
+
+@pytest.mark.parametrize("kind", ["uint8", "uint16 levels 0-255", "HxWx1", "HxWx4"])
+def test_captions_in_other_arrays(kind):
+    img = _caption(_scene(), 0, 0)
+    arr = {"uint8": lambda: img.astype(np.uint8), "uint16 levels 0-255": lambda: img.astype(np.uint16),
+           "HxWx1": lambda: img[:, :, None],
+           "HxWx4": lambda: np.dstack([img, img, img, np.full_like(img, 255)])}[kind]()
+    blanks = find_blanks(arr)
+    assert [c.side for c in blanks.captions] == ["top"]
+    out = fill_blanks(arr, blanks)
+    assert out.shape == arr.shape and out.dtype == arr.dtype and float(out[:18, :122].min()) > 40
+
+
 def _discs(img, n=3, r=9):
     """Bright discs (the searched objects) in the scene's lower half."""
     for i in range(n):
@@ -135,7 +179,9 @@ def test_real_video_captions():
     assert blanks.border == (6, 0, 485, 360)
     (c,) = blanks.captions                       # (x0: 6 or 7 by the JPEG decoder)
     assert (c.side, c.y0, c.x1, c.y1) == ("top", 0, 149, 19) and c.x0 in (6, 7)
+    # (1385: sun glare at the surface, a flat light blob at the top edge beside water)
     for parts in (("objects", "robosub_transdec", "images", "1375.jpg"),
+                  ("objects", "robosub_transdec", "images", "1385.jpg"),
                   ("sequences", "sparus_auv_seabed"), ("sequences", "aqualoc_amphorae_wreck")):
         p = data_path(*parts)
         files = [p] if p.is_file() else sorted(p.glob("*.png")) + sorted(p.glob("*.jpg"))

@@ -19,6 +19,8 @@ def _grey(image: np.ndarray, colour: bool | None = None) -> np.ndarray:
     if not (image.ndim == 3 if colour is None else colour):
         return image
     c = image.astype(np.float32, copy=False)
+    if c.shape[-1] != 3:                        # (one channel, grey and alpha...)
+        return c[..., 0] if c.shape[-1] < 3 else c[..., :3].mean(axis=-1)
     return (c[..., 0] + c[..., 1] + c[..., 2]) * np.float32(1.0 / 3.0)
 
 
@@ -127,24 +129,33 @@ def fill_blank_border(image: np.ndarray, box=None) -> np.ndarray:
 #: a burned-in caption's box: a connected region of flat levels, dark (at
 #: most CAPTION_DARK) or light (at least CAPTION_LIGHT), CAPTION_FLAT of it
 #: within CAPTION_LEVELS of its median (the RoboSub pool videos' timestamp
-#: box: 0-5, JPEG noise; the glyphs' smeared edges are the rest),
-#: touching an edge of the picture (within CAPTION_TOUCH px of it), wide (at
-#: least CAPTION_ASPECT times as wide as high, a line of text), at most
-#: CAPTION_HEIGHT of the image high and CAPTION_AREA of it in all, covering
-#: more than CAPTION_FILL of its bounding box, with text inside: at least
-#: CAPTION_TEXT of that box at the far end of the levels (at least
-#: CAPTION_INK levels from the box's)
+#: box: 0-5, JPEG noise; the glyphs' smeared edges are the rest), of at
+#: least CAPTION_MIN_PIXELS, touching an edge of the picture (within
+#: CAPTION_TOUCH px of it), wide (at least CAPTION_ASPECT times as wide as
+#: high, a line of text), at most CAPTION_HEIGHT of the image high and
+#: CAPTION_AREA of it in all, covering more than CAPTION_FILL of its bounding
+#: box and, with the holes it encloses (its glyphs), at least CAPTION_SOLID
+#: of it (a box, not a blob: sun glare at the surface, a disc cut by the
+#: frame), with text in those holes: at least CAPTION_TEXT of the box at
+#: least CAPTION_INK levels off the box's level. The RoboSub timestamp
+#: boxes: solid 0.95-1.00, text 0.11-0.18 of the box.
 CAPTION_DARK, CAPTION_LIGHT = 40.0, 215.0
 CAPTION_LEVELS = 6.0
 CAPTION_FLAT = 0.7
+CAPTION_MIN_PIXELS = 100
 CAPTION_TOUCH = 3
 CAPTION_ASPECT = 3.0
 CAPTION_HEIGHT = 0.1
 CAPTION_AREA = 0.05
 CAPTION_FILL = 0.5
+CAPTION_SOLID = 0.9
 CAPTION_TEXT = 0.03
 CAPTION_INK = 120.0
-CAPTION_MIN_PIXELS = 100
+#: the least height of such a box (CAPTION_MIN_PIXELS at CAPTION_ASPECT):
+#: an edge is read further only where its outermost lines hold a run of
+#: flat levels that long (left, right) or CAPTION_ASPECT times that (top,
+#: bottom)
+CAPTION_MIN_HEIGHT = int(np.sqrt(CAPTION_MIN_PIXELS / CAPTION_ASPECT))
 #: lines around a caption filled too (JPEG smear of its edge)
 CAPTION_MARGIN = 2
 
@@ -192,36 +203,78 @@ def caption_boxes(image: np.ndarray, border=None) -> tuple[Caption, ...]:
     deep = min(t + int(CAPTION_HEIGHT * h) + 1, y1 - y0)
     # where a caption may lie: a band along the top or the bottom (most
     # overlays), or the rows beside a run of an edge's flat levels for one at
-    # the left or right; each searched only when the picture's outermost lines
-    # hold such levels there (a photo is read in these bands alone)
+    # the left or right; each read only where the picture's outermost lines
+    # hold such a run (a photo is read in these bands alone)
     edges = {"top": (x0, y0, x1, y0 + t + 1), "bottom": (x0, y1 - t - 1, x1, y1),
              "left": (x0, y0, x0 + t + 1, y1), "right": (x1 - t - 1, y0, x1, y1)}
-    found = set()
+    found = []
     for dark in (True, False):
-        done: list = []
+        rows = []                                   # (first, end) rows to read
         for edge, (ex0, ey0, ex1, ey1) in edges.items():
             e = _grey(image[ey0:ey1, ex0:ex1])
             hit = (e <= CAPTION_DARK) if dark else (e >= CAPTION_LIGHT)
-            if not hit.any():
-                continue
-            if edge == "top":
-                regions = [(x0, y0, x1, y0 + deep)]
-            elif edge == "bottom":
-                regions = [(x0, y1 - deep, x1, y1)]
-            else:   # each run of such rows no taller than a caption, and a margin
-                rows = np.flatnonzero(hit.any(axis=1))
-                cuts = np.flatnonzero(np.diff(rows) > 1)
-                regions = [(x0, max(y0, ey0 + int(a) - t - 1), x1, min(y1, ey0 + int(b) + t + 2))
-                           for a, b in zip(rows[np.r_[0, cuts + 1]], rows[np.r_[cuts, -1]])
-                           if b - a < deep]
-            for region in regions:
-                if not any(r[1] <= region[1] and region[3] <= r[3] for r in done):
-                    found |= _captions_in(image, region, (x0, y0, x1, y1), dark)
-                    done.append(region)   # (a region within one already read: skipped)
-    return tuple(sorted(found, key=lambda c: (c.y0, c.x0)))
+            along = hit.any(axis=0 if edge in ("top", "bottom") else 1)
+            for a, b in _runs(along):
+                if edge == "top" and b - a >= CAPTION_ASPECT * CAPTION_MIN_HEIGHT:
+                    rows.append((y0, y0 + deep))
+                elif edge == "bottom" and b - a >= CAPTION_ASPECT * CAPTION_MIN_HEIGHT:
+                    rows.append((y1 - deep, y1))
+                elif edge in ("left", "right") and CAPTION_MIN_HEIGHT <= b - a < deep:
+                    rows.append((max(y0, ey0 + a - t - 1), min(y1, ey0 + b + t + 1)))
+        for r0, r1 in _merged(rows):                # (each row read once)
+            found += _captions_in(image, (x0, r0, x1, r1), (x0, y0, x1, y1), dark)
+    return tuple(sorted(_joined(found, (x0, y0, x1, y1)), key=lambda c: (c.y0, c.x0)))
 
 
-def _captions_in(image: np.ndarray, region, border, dark: bool) -> set:
+def _runs(flags: np.ndarray) -> list:
+    """(start, end) of each run of True in a 1-D boolean array."""
+    d = np.diff(np.r_[0, flags.astype(np.int8), 0])
+    return list(zip(np.flatnonzero(d == 1).tolist(), np.flatnonzero(d == -1).tolist()))
+
+
+def _merged(spans: list) -> list:
+    """Overlapping (start, end) spans joined, in order."""
+    out: list = []
+    for a, b in sorted(set(spans)):
+        if out and a <= out[-1][1]:
+            out[-1] = (out[-1][0], max(out[-1][1], b))
+        else:
+            out.append((a, b))
+    return out
+
+
+def _side(x0: int, y0: int, x1: int, y1: int, border) -> str:
+    """The edge of the picture ``border`` that a box (margins included)
+    touches, the first of top, bottom, left, right; "" for none."""
+    t = CAPTION_TOUCH - CAPTION_MARGIN           # (the box's own edge within CAPTION_TOUCH)
+    bx0, by0, bx1, by1 = border
+    return ("top" if y0 <= by0 + t else "bottom" if y1 >= by1 - t else
+            "left" if x0 <= bx0 + t else "right" if x1 >= bx1 - t else "")
+
+
+def _joined(caps: list, border) -> list:
+    """Captions whose boxes (margins included) overlap, joined into one box,
+    filled from the edge it touches: a two-line overlay's boxes are filled
+    from beyond both, not one from the other."""
+    caps = list(dict.fromkeys(caps))
+    merged = True
+    while merged:
+        merged = False
+        for i in range(len(caps)):
+            for j in range(i + 1, len(caps)):
+                a, b = caps[i], caps[j]
+                if a.x0 < b.x1 and b.x0 < a.x1 and a.y0 < b.y1 and b.y0 < a.y1:
+                    box = (min(a.x0, b.x0), min(a.y0, b.y0), max(a.x1, b.x1), max(a.y1, b.y1))
+                    caps[i] = Caption(_side(*box, border), *box)
+                    del caps[j]
+                    merged = True
+                    break
+            if merged:
+                break
+    return caps
+
+
+def _captions_in(image: np.ndarray, region, border, dark: bool) -> list:
     """The captions of :func:`caption_boxes` (dark or light boxes) whose box
     lies in ``region`` (x0, y0, x1, y1) of the picture ``border``."""
     h, w = image.shape[:2]
@@ -230,8 +283,8 @@ def _captions_in(image: np.ndarray, region, border, dark: bool) -> set:
     sub = _grey(image[ry0:ry1, rx0:rx1])
     mask = (sub <= CAPTION_DARK) if dark else (sub >= CAPTION_LIGHT)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(mask.view(np.uint8), connectivity=8)
-    out = set()
-    t, m = CAPTION_TOUCH, CAPTION_MARGIN
+    out = []
+    m = CAPTION_MARGIN
     x_, y_, bw_, bh_, area_ = stats[1:].T.astype(np.int64)
     ok = ((area_ >= CAPTION_MIN_PIXELS) & (bw_ >= CAPTION_ASPECT * bh_)
           & (bh_ <= CAPTION_HEIGHT * h) & (bw_ * bh_ <= CAPTION_AREA * h * w)
@@ -240,24 +293,32 @@ def _captions_in(image: np.ndarray, region, border, dark: bool) -> set:
     for i in np.flatnonzero(ok) + 1:
         x, y, bw, bh = (int(v) for v in stats[i, :4])
         box = sub[y:y + bh, x:x + bw]
-        level = box[labels[y:y + bh, x:x + bw] == i]
+        comp = labels[y:y + bh, x:x + bw] == i
+        level = box[comp]
         mid = float(np.median(level))
         if np.mean(np.abs(level - mid) <= CAPTION_LEVELS) < CAPTION_FLAT:
             continue
-        ink = (box >= mid + CAPTION_INK) if dark else (box <= mid - CAPTION_INK)
+        # the holes it encloses: what is not it and not reached from outside its box
+        outside = np.pad(~comp, 1, constant_values=True).view(np.uint8)
+        cv2.floodFill(outside, None, (0, 0), 2)
+        holes = outside[1:-1, 1:-1] == 1
+        if (comp | holes).mean() < CAPTION_SOLID:
+            continue
+        ink = ((box >= mid + CAPTION_INK) if dark else (box <= mid - CAPTION_INK)) & holes
         if ink.mean() < CAPTION_TEXT:
             continue
         x, y = x + rx0, y + ry0
-        side = ("top" if y <= y0 + t else "bottom" if y + bh >= y1 - t else
-                "left" if x <= x0 + t else "right" if x + bw >= x1 - t else "")
+        box = (max(x - m, x0), max(y - m, y0), min(x + bw + m, x1), min(y + bh + m, y1))
+        side = _side(*box, border)
         if side:
-            out.add(Caption(side, max(x - m, x0), max(y - m, y0), min(x + bw + m, x1),
-                            min(y + bh + m, y1)))
+            out.append(Caption(side, *box))
     return out
 
 
 def find_blanks(image: np.ndarray) -> Blanks:
-    """The :class:`Blanks` of a frame (grey or colour, levels 0-255).
+    """The :class:`Blanks` of a frame (grey or colour, levels 0-255 as a
+    search sees them: an image in other units, 16-bit levels or floats in
+    0-1, is to be scaled to them first, :func:`seahough.io.images.to_gray`).
 
     >>> img = np.random.default_rng(0).uniform(60, 200, (60, 80)).astype(np.float32)
     >>> img[:, :6] = 0
