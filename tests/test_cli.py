@@ -471,6 +471,26 @@ def test_not_found_says_why(tmp_path):
     assert json.loads(proc.stdout)["note"] == ""
 
 
+def test_a_caption_is_listed_and_drawn(tmp_path):
+    """A frame with a burned-in timestamp box: JSON "captions" lists its box
+    (filled, not searched), the overlay is drawn; a frame without: []."""
+    img = np.random.default_rng(0).uniform(60, 200, (240, 320)).astype(np.uint8)
+    cv2.rectangle(img, (150, 100), (230, 150), 240, -1)
+    plain = img.copy()
+    img[:16, :120] = 0
+    for cx in range(8, 114, 14):
+        cv2.circle(img, (cx, 8), 4, 235, -1)
+    cv2.imwrite(str(tmp_path / "cap.png"), img)
+    cv2.imwrite(str(tmp_path / "plain.png"), plain)
+    proc = run("detect", "rect:80,50", tmp_path / "cap.png", tmp_path / "plain.png", "--json",
+               "-o", tmp_path / "out", "--pictures", "overlay")
+    assert proc.returncode == 0, proc.stderr
+    recs = [json.loads(line) for line in proc.stdout.splitlines()]
+    assert [r["captions"] for r in recs] == [[[0, 0, 122, 18]], []]
+    assert recs[0]["found"] and (tmp_path / "out" / "cap_overlay.png").is_file()
+    assert "captions" in run("detect", "--help").stdout
+
+
 def test_angles_near_360_are_printed_wrapped():
     """The table prints the rounded angle in [0, 360) (lines: [0, 180))."""
     from seahough.cli.detect import _detection_lines

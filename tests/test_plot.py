@@ -912,3 +912,36 @@ def test_a_thin_shape_that_is_no_straight_strip_keeps_its_outline():
     ell = np.array([[0, 0], [4, 0], [4, 36], [40, 36], [40, 40], [0, 40]], float) + 100
     pts, lw, fx = _outline_style(ell, 0.25)
     assert len(pts) == 7 and fx is _THIN_OUTLINE
+
+
+def test_a_filled_caption_is_drawn_and_kept_free_of_the_labels(monkeypatch):
+    """plot_detections(blanks=...): each caption's box dashed, with its note;
+    its corners are among what the list and the pattern inset keep clear of."""
+    from seahough.core.blanks import find_blanks
+    img = np.random.default_rng(0).uniform(60, 200, (240, 320)).astype(np.float32)
+    img[:16, :120] = 0
+    for cx in range(8, 114, 14):
+        cv2.circle(img, (cx, 8), 4, 235.0, -1)
+    for x in (60, 160, 260):
+        cv2.circle(img, (x, 170), 12, 250.0, -1)
+    res = seahough.Detector(seahough.Pattern.circle(12), max_results=3).search(img)
+    assert len(res.detections) == 3 and res.blanks.captions
+    import seahough.viz.detections as V
+    seen = {}
+    free = V._free_corners
+
+    def spy(points, w, h):
+        seen["points"] = points
+        return free(points, w, h)
+
+    monkeypatch.setattr(V, "_free_corners", spy)
+    fig = plot.plot_detections(img, res.detections, blanks=res.blanks)
+    ax = fig.axes[0]
+    assert any(t.get_text() == "caption, not searched" for t in ax.texts)
+    dashed = [ln for ln in ax.lines if ln.get_linestyle() not in ("-", "None")]
+    assert len(dashed) == 1
+    xs, ys = dashed[0].get_data()
+    assert (min(xs), max(xs), min(ys), max(ys)) == (-0.5, 121.5, -0.5, 17.5)
+    pts = {tuple(p) for p in seen["points"].tolist()}
+    assert {(0.0, 0.0), (122.0, 18.0)} <= pts
+    assert free(seen["points"], 320, 240)[0] != 0            # (not the top left corner)

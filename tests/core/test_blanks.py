@@ -165,6 +165,7 @@ def test_a_caption_s_digits_are_not_found_as_objects(monkeypatch):
         return c.fit.pose.ty < 22 and c.fit.pose.tx < 165 and c.fit.score >= 0.6
 
     res = det.search(img)
+    assert res.blanks is not None and [c.side for c in res.blanks.captions] == ["top"]
     assert not any(in_caption(c) for c in res.candidates)
     assert sorted(round(d.y) for d in res.detections) == [170, 170, 170]
     monkeypatch.setattr(B, "caption_boxes", lambda image, border=None: ())

@@ -69,6 +69,13 @@ def _detection_lines(dets) -> list[str]:
     return _table(rows, header)
 
 
+def _captions(res) -> list:
+    """The burned-in captions filled before a search, as JSON: each
+    ``[x0, y0, x1, y1]`` (end exclusive, image pixels); [] for none."""
+    b = getattr(res, "blanks", None)
+    return [[c.x0, c.y0, c.x1, c.y1] for c in b.captions] if b is not None else []
+
+
 def best_declined(res):
     """The best-scoring candidate of a search that was not reported (not
     merely a repeat of a better one), or None: what a user tunes by."""

@@ -22,7 +22,7 @@ from ._common import (CurveSearch, _Output, _dumps, _max_nfa_callback, _out_dir,
                       _progress, _range_callback, bit_depth_option, default_workers,
                       make_detector, workers_option)
 from ._records import (CSV_COLUMNS, _best_declined_dict, _best_declined_line, _csv_line,
-                       _csv_rows, _detection_lines, _frame, best_declined)
+                       _captions, _csv_rows, _detection_lines, _frame, best_declined)
 
 # the command's defaults are the library's, so that both give the same results
 _DET = {k: v.default for k, v in inspect.signature(Detector.__init__).parameters.items()}
@@ -172,7 +172,7 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, draw: Dr
         return
     if "overlay" in kinds:
         plot.plot_detections(img, dets, ov, pattern=pat, title=head, max_width=max_width,
-                             bit_depth=detector.config.bit_depth)
+                             bit_depth=detector.config.bit_depth, blanks=res.blanks)
         written["overlay"] = str(ov)
     feats = res.features
     acc_title = f"{Path(name).name}: accumulator"
@@ -362,8 +362,10 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     a detection's number of false alarms: how many detections this good
     chance alone would give in an image without the object (1e-5: one in
     100,000 such images); only those of at most --max-nfa are reported. A
-    progress bar is shown on stderr for several images when stderr is a
-    terminal.
+    video's burned-in caption (a timestamp on a flat box at an edge) is not
+    searched: JSON "captions" lists each box [x0, y0, x1, y1], the overlay
+    draws it dashed. A progress bar is shown on stderr for several images
+    when stderr is a terminal.
 
     \b
     Images are searched --workers at a time (default: all cores), each
@@ -451,7 +453,7 @@ def _report(outcomes, bar, say, form: str, quiet: bool) -> tuple[int, int]:
             rec = {"file": name, "width": int(w), "height": int(h), "found": bool(dets),
                    "note": res.note, "detections": [d.to_dict() for d in dets],
                    "best_declined": None if dets else _best_declined_dict(best_declined(res)),
-                   "time_ms": round(ms, 3)}
+                   "captions": _captions(res), "time_ms": round(ms, 3)}
             if split_video_ref(name) is not None:
                 rec["frame"] = _frame(name)
             rec.update(written)

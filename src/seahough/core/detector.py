@@ -25,7 +25,7 @@ from .accumulator import (AccumulatorPlanes, accumulate, check_ranges, edge_gap,
 from .candidates import PoseComparison, SearchContext, find_candidates
 from .features import Features, extract_features
 from .pattern import Pattern
-from .blanks import find_blanks
+from .blanks import Blanks, find_blanks
 from .preprocess import choose_factor, prepare_image
 from .ranking import (FLAG_ALONG_LINE, FLAG_AMBIGUOUS, FLAG_GREY, FLAG_OUTSIDE_RANGE,
                       FLAG_PARTIAL, FLAG_RANGE_EDGE, Detection, confidence, line_parameters, rank)
@@ -70,6 +70,9 @@ class SearchResult:
     patterns, ``parts`` holds each pattern's own result by name (``planes``
     and ``features`` are then those of the best detection's pattern, or of
     the first pattern when none is found; ``planes.pattern`` names it).
+    ``blanks`` is what was filled in the image before the search
+    (:class:`~.blanks.Blanks`: its letterbox border, burned-in captions);
+    None when it was searched as given (features given, a frame pattern).
     """
 
     detections: list
@@ -80,6 +83,7 @@ class SearchResult:
     timings: dict             # seconds, by stage
     note: str = ""
     parts: dict = field(default_factory=dict)
+    blanks: Blanks | None = None
 
 
 #: An image with fewer edge segments than this at the working scale has no
@@ -227,15 +231,19 @@ class Detector:
             image = read_image(image, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
         gray = to_image(image, cfg.colour, name=label, max_pixels=cfg.max_pixels,
                         max_memory_mb=cfg.max_memory_mb, bit_depth=cfg.bit_depth)
+        blanks = None
         if features is None and not self.pattern.is_frame:
             # (given features: the caller prepared the image; a frame pattern, in
             # photo motion, is matched to the next frame as both come)
-            gray = prepare_image(gray, cfg)
+            blanks = find_blanks(gray)
+            gray = prepare_image(gray, cfg, blanks)
         if self._grey is not None and gray.ndim == 2:
-            return self._grey._search_in_grey(gray, features, t0)
-        res = self._search_pattern(gray, features, t0)
-        if self._grey is not None and not res.detections and features is None:
-            return self._grey_after_colour(image, label, res, t0)
+            res = self._grey._search_in_grey(gray, features, t0)
+        else:
+            res = self._search_pattern(gray, features, t0)
+            if self._grey is not None and not res.detections and features is None:
+                res = self._grey_after_colour(image, label, res, t0)
+        res.blanks = blanks
         return res
 
     def _grey_after_colour(self, image, label: str, res: SearchResult,
@@ -422,6 +430,7 @@ class Detector:
         images = {c: to_image(image, c, name=label, max_pixels=cfg.max_pixels,
                               max_memory_mb=cfg.max_memory_mb, bit_depth=cfg.bit_depth)
                   for c in kinds}
+        blanks = None
         if features is None:
             # (the grey and the colour copy filled alike: as the grey one's blanks)
             blanks = find_blanks(images[min(images)])
@@ -474,7 +483,7 @@ class Detector:
         note = "" if "" in notes else first.note
         return SearchResult(dets, first.planes, first.features, first.factor,
                             [c for r in results.values() for c in r.candidates], timings,
-                            note, results)
+                            note, results, blanks)
 
     def _region(self, features: Features, factor: float, s1: float):
         """Where the pattern origin may lie, (x0, y0, x1, y1) in working

@@ -449,8 +449,18 @@ def _image_figure(image, max_width, bit_depth=None):
     return fig, ax, disp, colour, (w, h), (iw, ih)
 
 
+def _draw_caption(ax, cap) -> None:
+    """A filled caption's box (:class:`~seahough.core.blanks.Caption`),
+    dashed, with a small note inside it."""
+    x0, y0, x1, y1 = cap.x0 - 0.5, cap.y0 - 0.5, cap.x1 - 0.5, cap.y1 - 0.5
+    ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="0.85", lw=1.2, ls=(0, (4, 3)),
+            path_effects=_THIN_OUTLINE)
+    ax.text(0.5 * (x0 + x1), 0.5 * (y0 + y1), "caption, not searched", color="0.95",
+            fontsize=7, ha="center", va="center", clip_on=True, path_effects=_THIN_OUTLINE)
+
+
 def plot_detections(image, detections, path=None, *, pattern=None, title=None,
-                    max_width=None, bit_depth=None) -> Figure:
+                    max_width=None, bit_depth=None, blanks=None) -> Figure:
     """The image with each detection's outline, origin and numbers.
 
     Parameters
@@ -494,6 +504,10 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
         A uint16 image's significant bits, as the search read it
         (:attr:`seahough.Config.bit_depth`: a 12-bit camera's frames are
         otherwise drawn 16 times too dark).
+    blanks : Blanks, optional
+        What the search filled before it looked (``SearchResult.blanks``):
+        each burned-in caption's box is drawn dashed, marked "caption, not
+        searched" (an object under it could not be found).
 
     Returns
     -------
@@ -525,6 +539,9 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
     ax.set_ylabel("y (px)")
     detections = list(detections or [])
     anchors = []
+    for cap in (blanks.captions if blanks is not None else ()):
+        _draw_caption(ax, cap)      # (and kept free of the labels, as an object is)
+        anchors.append(np.array([[cap.x0, cap.y0], [cap.x1, cap.y1]], float))
     for i, (d, c) in enumerate(zip(detections, colours(detections))):
         is_line = d.kind == "line"
         seg = None
