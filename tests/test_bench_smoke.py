@@ -402,7 +402,7 @@ def test_robosub_benchmark_quick(tmp_path):
     if shared_data_dir() is None:
         pytest.skip("real data (../shared/data) is not present beside this checkout")
     out = tmp_path / "robosub.md"
-    text = _quick_page(ROOT / "bench" / "bench_robosub.py", out)
+    text = _quick_page(ROOT / "bench" / "bench_robosub.py", out, "--cache", tmp_path / "rs.cache")
     assert "Machine:" in text and "Command:" in text and "Date:" in text
     assert "tune part = frames 100-999 and 1401-1469; test part = frames 1000-1400" in text
     targets = _rows(_section(text, "## Targets"))[1:]
@@ -424,6 +424,17 @@ def test_robosub_benchmark_quick(tmp_path):
             assert int(r[col["of which on other props"]]) <= int(false), r
             assert photos == "3", r                           # the quick run's 3 test photos
             assert float(r[col["test ms"]]) > 0, r
+    # bench/robosub_unmatched.py: a tile for each unmatched buoy of the defaults row
+    rows = _rows(_section(text, "## Buoys"))
+    false = int(re.search(r"\((\d+)/3\)", [r for r in rows if r[0] == "seahough (defaults)"][0][
+        rows[0].index("test false / image")]).group(1))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]))
+    proc = subprocess.run([sys.executable, str(ROOT / "bench" / "robosub_unmatched.py"), "--cache",
+                           str(tmp_path / "rs.cache"), "--out", str(tmp_path / "unm")], cwd=ROOT,
+                          env=env, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    items = json.loads((tmp_path / "unm" / "items.json").read_text())
+    assert len(items) == false and len(list((tmp_path / "unm").glob("*.png"))) == -(-false // 16)
 
 
 
