@@ -938,6 +938,7 @@ def test_not_found_shows_the_best_candidate_and_why(tmp_path):
     assert len(lines) == 2 and "not found" in lines[0]
     assert lines[1].startswith("  best candidate, not reported: x "), lines[1]
     assert "under min_score 0.99" in lines[1] or "the least that could win" in lines[1], lines[1]
+    assert lines[1].endswith("(option --min-score)"), lines[1]        # the setting, named
     rec = json.loads(run("detect", "rect:120,80", tmp_path / "r.png", "--min-score", 0.99,
                          "--json").stdout)
     best = rec["best_declined"]

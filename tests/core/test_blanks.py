@@ -189,3 +189,18 @@ def test_real_video_captions():
         for f in files[:6]:
             img = cv2.imread(str(f))
             assert caption_boxes(img.astype(np.float32)) == (), f
+
+
+def test_a_colour_search_does_not_take_a_letterbox_bar_for_a_post():
+    """Searched in colour, a video frame's bars are filled as in grey (the
+    border found on its grey copy) and further into its colour channels,
+    where the codec smears the bar's edge (a user trial found the bar of
+    RoboSub frame 1026 as a post, in colour only)."""
+    frame = cv2.imread(str(data_path("objects", "robosub_transdec", "images", "1026.jpg")))
+    for colour in (False, True):
+        det = seahough.Detector(seahough.Pattern.line(55, 3), scale_range=(0.6, 1.6),
+                                angle_range=(80, 100), max_results=4,
+                                config=seahough.Config(colour=colour))
+        res = det.search(frame)
+        assert res.blanks.border == (7, 0, 485, 360)
+        assert not [d for d in res.detections if d.x < 12 or d.x > 480], colour

@@ -95,13 +95,21 @@ def _best_declined_dict(c) -> dict | None:
             "nfa": float(c.nfa) if math.isfinite(c.nfa) else None, "declined": c.declined}
 
 
+#: the option that sets what a declined candidate fell short of, by the
+#: words of its reason (a user trial: the reason never named the option)
+_OPTION_OF = (("min_score", "--min-score"), ("max_nfa", "--max-nfa"),
+              ("max_results", "--max-results"), ("min_confidence", "--min-confidence"))
+
+
 def _best_declined_line(c) -> str:
     q = c.pose
     name = f"{c.pattern}: " if c.pattern else ""
     nfa = f", nfa {_nfa_text(c.nfa)}" if math.isfinite(c.nfa) else ""
+    option = next((o for words, o in _OPTION_OF if words in c.declined), None)
+    hint = f" (option {option})" if option else ""
     return (f"  best candidate, not reported: {name}x {q.tx:.1f}, y {q.ty:.1f}, scale "
             f"{q.scale:.3f}, angle {format_angle(q.angle, 1)}, score {c.score:.2f}{nfa}: "
-            f"{c.declined}")
+            f"{c.declined}{hint}")
 
 
 #: The columns of ``detect --csv``: the image's, then a detection's (a

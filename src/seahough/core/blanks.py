@@ -48,6 +48,12 @@ BLANK_STEP_SHARE = 0.75
 #: lines beyond a blank border left out too: the JPEG-smeared line between
 #: bar and content (RoboSub: a column at 43 between 0 and 82)
 BLANK_MARGIN = 2
+#: ... and this many more in a colour image's copy: JPEG and video codecs
+#: keep colour at half resolution (4:2:0), so a bar's edge smears further
+#: into the picture's colour channels (RoboSub: red 11, 25, 59, 44, 0 over
+#: the 4 columns before a bar where grey steps once; a user trial's colour
+#: search found the bar's edge as a post)
+CHROMA_MARGIN = 2
 
 
 def blank_border(gray: np.ndarray) -> tuple[int, int, int, int]:
@@ -325,6 +331,12 @@ def find_blanks(image: np.ndarray) -> Blanks:
     >>> find_blanks(img)
     Blanks(border=(8, 0, 80, 60), captions=())
     """
+    if image.ndim == 3 and image.shape[2] in (3, 4):
+        # (a colour frame's blanks are its grey copy's, as when it is searched in
+        # grey: the mean of its channels left a letterbox bar's fade column in,
+        # a "post" in a user trial's colour search)
+        code = cv2.COLOR_BGR2GRAY if image.shape[2] == 3 else cv2.COLOR_BGRA2GRAY
+        image = cv2.cvtColor(np.ascontiguousarray(image, np.float32), code)
     border = blank_border(image)
     return Blanks(border, caption_boxes(image, border))
 
@@ -347,7 +359,10 @@ def fill_blanks(image: np.ndarray, blanks: Blanks | None = None) -> np.ndarray:
     if blanks.captions:
         image = image.copy()
         bx0, by0, bx1, by1 = blanks.border
+        m = CHROMA_MARGIN if image.ndim == 3 else 0     # (a colour copy: its smear too)
         for c in blanks.captions:
+            c = Caption(c.side, max(c.x0 - m, bx0), max(c.y0 - m, by0), min(c.x1 + m, bx1),
+                        min(c.y1 + m, by1))
             if c.side == "top" and c.y1 < by1:
                 image[by0:c.y1, c.x0:c.x1] = image[c.y1:c.y1 + 1, c.x0:c.x1]
             elif c.side == "bottom" and c.y0 > by0:
@@ -356,4 +371,11 @@ def fill_blanks(image: np.ndarray, blanks: Blanks | None = None) -> np.ndarray:
                 image[c.y0:c.y1, bx0:c.x1] = image[c.y0:c.y1, c.x1:c.x1 + 1]
             elif c.side == "right" and c.x0 > bx0:
                 image[c.y0:c.y1, c.x0:bx1] = image[c.y0:c.y1, c.x0 - 1:c.x0]
-    return fill_blank_border(image, blanks.border)
+    border = blanks.border
+    if image.ndim == 3 and border != (0, 0) + image.shape[1::-1]:
+        h, w = image.shape[:2]
+        x0, y0, x1, y1 = border
+        c = CHROMA_MARGIN
+        border = (x0 + c if x0 else 0, y0 + c if y0 else 0, x1 - c if x1 < w else w,
+                  y1 - c if y1 < h else h)
+    return fill_blank_border(image, border)

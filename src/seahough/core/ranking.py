@@ -380,9 +380,11 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
     todo = [c for c in cands if c.work_score >= pre][: ctx.max_results + 2]
     for c in cands:
         c.placed = _full_pose(c.fit.pose, ctx.features)
-        if c.work_score < pre:
+        if c.work_score < pre:   # (which bound: a user could not tell what to change)
+            bound = ("0.85 x min_score" if 0.85 * ctx.min_score >= 0.6 * best
+                     else "0.6 x the best candidate's")
             c.declined = (f"score {c.work_score:.3g} (coarse, before the full-resolution "
-                          f"finish) under {pre:.3g}, the least that could win")
+                          f"finish) under {pre:.3g} ({bound}), the least that could win")
         elif not any(c is t for t in todo):
             c.declined = (f"score {c.work_score:.3g} (coarse): {ctx.max_results + 2} "
                           "better ones were finished (max_results + 2)")

@@ -455,8 +455,14 @@ def _draw_caption(ax, cap) -> None:
     x0, y0, x1, y1 = cap.x0 - 0.5, cap.y0 - 0.5, cap.x1 - 0.5, cap.y1 - 0.5
     ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="0.85", lw=1.2, ls=(0, (4, 3)),
             path_effects=_THIN_OUTLINE)
-    ax.text(0.5 * (x0 + x1), 0.5 * (y0 + y1), "caption, not searched", color="0.95",
-            fontsize=7, ha="center", va="center", clip_on=True, path_effects=_THIN_OUTLINE)
+    # beside the box, on the picture's side (on it, neither could be read: a user trial)
+    mx, my = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+    x, y, ha, va = {"top": (x0, y1 + 1, "left", "top"), "bottom": (x0, y0 - 1, "left", "bottom"),
+                    "left": (x1 + 1, my, "left", "center"),
+                    "right": (x0 - 1, my, "right", "center")}.get(cap.side, (mx, my, "center",
+                                                                               "center"))
+    ax.text(x, y, "caption, not searched", color="0.95", fontsize=7, ha=ha, va=va,
+            clip_on=True, path_effects=_THIN_OUTLINE)
 
 
 def plot_detections(image, detections, path=None, *, pattern=None, title=None,
