@@ -491,6 +491,26 @@ def test_a_caption_is_listed_and_drawn(tmp_path):
     assert "captions" in run("detect", "--help").stdout
 
 
+def test_several_patterns_say_which_found_nothing(tmp_path):
+    """Several patterns, one of them not in the image: the table says
+    "not found: NAME" with its best declined candidate (a user trial found
+    it silent), JSON "not_found" lists it; the image was found (exit 0)."""
+    img = np.full((200, 260), 80, np.uint8)
+    cv2.rectangle(img, (70, 60), (190, 140), 170, -1)
+    cv2.imwrite(str(tmp_path / "r.png"), img)
+    proc = run("detect", "box=rect:120,80+disc=circle:20", tmp_path / "r.png")
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert "  not found: disc" in lines
+    after = lines[lines.index("  not found: disc") + 1]
+    assert after.startswith("  best candidate, not reported: disc: x "), after
+    rec = json.loads(run("detect", "box=rect:120,80+disc=circle:20", tmp_path / "r.png",
+                         "--json").stdout)
+    assert rec["found"] and rec["not_found"] == ["disc"]
+    one = json.loads(run("detect", "rect:120,80", tmp_path / "r.png", "--json").stdout)
+    assert "not_found" not in one
+
+
 def test_angles_near_360_are_printed_wrapped():
     """The table prints the rounded angle in [0, 360) (lines: [0, 180))."""
     from seahough.cli.detect import _detection_lines

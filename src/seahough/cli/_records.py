@@ -69,6 +69,13 @@ def _detection_lines(dets) -> list[str]:
     return _table(rows, header)
 
 
+def patterns_not_found(res) -> list:
+    """Several patterns searched: the names of those with no detection in
+    the image ([] for one pattern: its "not found" is the image's)."""
+    return [name for name, part in (getattr(res, "parts", None) or {}).items()
+            if not part.detections]
+
+
 def _captions(res) -> list:
     """The burned-in captions filled before a search, as JSON: each
     ``[x0, y0, x1, y1]`` (end exclusive, image pixels); [] for none."""

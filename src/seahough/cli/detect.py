@@ -22,7 +22,8 @@ from ._common import (CurveSearch, _Output, _dumps, _max_nfa_callback, _out_dir,
                       _progress, _range_callback, bit_depth_option, default_workers,
                       make_detector, workers_option)
 from ._records import (CSV_COLUMNS, _best_declined_dict, _best_declined_line, _csv_line,
-                       _captions, _csv_rows, _detection_lines, _frame, best_declined)
+                       _captions, _csv_rows, _detection_lines, _frame, best_declined,
+                       patterns_not_found)
 
 # the command's defaults are the library's, so that both give the same results
 _DET = {k: v.default for k, v in inspect.signature(Detector.__init__).parameters.items()}
@@ -364,7 +365,10 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     100,000 such images); only those of at most --max-nfa are reported. A
     video's burned-in caption (a timestamp on a flat box at an edge) is not
     searched: JSON "captions" lists each box [x0, y0, x1, y1], the overlay
-    draws it dashed. A progress bar is shown on stderr for several images
+    draws it dashed. With several patterns, those that found nothing in an
+    image are named under its table ("not found: NAME", with their best
+    candidate; JSON "not_found"); the image counts as found when one did.
+    A progress bar is shown on stderr for several images
     when stderr is a terminal.
 
     \b
@@ -454,6 +458,8 @@ def _report(outcomes, bar, say, form: str, quiet: bool) -> tuple[int, int]:
                    "note": res.note, "detections": [d.to_dict() for d in dets],
                    "best_declined": None if dets else _best_declined_dict(best_declined(res)),
                    "captions": _captions(res), "time_ms": round(ms, 3)}
+            if res.parts:
+                rec["not_found"] = patterns_not_found(res)
             if split_video_ref(name) is not None:
                 rec["frame"] = _frame(name)
             rec.update(written)
@@ -466,6 +472,13 @@ def _report(outcomes, bar, say, form: str, quiet: bool) -> tuple[int, int]:
                 say(f"{printable(name)}  {w}x{h}  {len(dets)} found  ({ms:.0f} ms)")
                 for line in _detection_lines(dets):
                     say(line)
+                missing = patterns_not_found(res)
+                if missing:     # (several patterns: those that found nothing, and why)
+                    say(printable("  not found: " + ", ".join(missing)))
+                    for name in missing if not quiet else ():
+                        near = best_declined(res.parts[name])
+                        if near is not None:
+                            say(printable(_best_declined_line(near)))
             else:
                 say(f"{printable(name)}  {w}x{h}  not found{why}  ({ms:.0f} ms)")
                 near = best_declined(res)
