@@ -489,6 +489,14 @@ def test_a_caption_is_listed_and_drawn(tmp_path):
     assert [r["captions"] for r in recs] == [[[0, 0, 122, 18]], []]
     assert recs[0]["found"] and (tmp_path / "out" / "cap_overlay.png").is_file()
     assert "captions" in run("detect", "--help").stdout
+    # --ignore: the region left out (clipped to the image), listed in the JSON
+    proc = run("detect", "rect:80,50", tmp_path / "plain.png", "--json", "--ignore",
+               "140,90,240,160", "--ignore", "300,200,400,300")
+    rec = json.loads(proc.stdout)
+    assert proc.returncode == 1 and rec["ignored"] == [[140, 90, 240, 160], [300, 200, 320, 240]]
+    for bad in ("1,2,3", "5,0,2,10", "a,b,c,d"):
+        proc = run("detect", "rect:80,50", tmp_path / "plain.png", "--ignore", bad)
+        assert_one_error_line(proc, "--ignore", bad)
 
 
 def test_several_patterns_say_which_found_nothing(tmp_path):

@@ -6,6 +6,7 @@ import pytest
 
 import seahough
 from seahough.config import ODOMETRY_CONFIG, Config, OdometryTuning, SearchTuning
+from seahough.errors import ParameterError
 
 
 @pytest.mark.parametrize("field, value", [("screen", 1.5), ("icp_points", 2.5), ("peak_radius", -1),
@@ -80,3 +81,18 @@ def test_smooth_is_a_sigma_that_photo_patterns_share():
     for bad in (-1.0, float("nan"), 1000.0):
         with pytest.raises(ParameterError, match="smooth"):
             Config(smooth=bad)
+
+
+@pytest.mark.parametrize("bad", ["0,0,10,10", [(0, 0, 10)], [(5, 0, 2, 10)], [(0, -1, 10, 10)],
+                                 [(0, 0, float("nan"), 10)], [("a", 0, 1, 1)], 3])
+def test_ignore_refuses_what_is_not_boxes_by_name(bad):
+    with pytest.raises(ParameterError, match="Config.ignore"):
+        Config(ignore=bad)
+
+
+def test_ignore_is_kept_as_whole_pixel_boxes_and_recorded_only_when_set():
+    from seahough.config import config_record
+    c = Config(ignore=[[10, 20.4, 30, 40]])
+    assert c.ignore == ((10, 20, 30, 40),) and hash(c) == hash(Config(ignore=((10, 20, 30, 40),)))
+    assert config_record(c)["ignore"] == [[10, 20, 30, 40]]
+    assert "ignore" not in config_record(Config())

@@ -940,6 +940,11 @@ def test_a_filled_caption_is_drawn_and_kept_free_of_the_labels(monkeypatch):
     assert any(t.get_text() == "caption, not searched" for t in ax.texts)
     dashed = [ln for ln in ax.lines if ln.get_linestyle() not in ("-", "None")]
     assert len(dashed) == 1
+    # a region of Config.ignore too, marked as such
+    from seahough.core.blanks import Blanks
+    more = Blanks(res.blanks.border, res.blanks.captions, ((200, 20, 300, 60),))
+    fig2 = plot.plot_detections(img, res.detections, blanks=more)
+    assert any(t.get_text() == "ignored, not searched" for t in fig2.axes[0].texts)
     xs, ys = dashed[0].get_data()
     assert (min(xs), max(xs), min(ys), max(ys)) == (-0.5, 121.5, -0.5, 17.5)
     pts = {tuple(p) for p in seen["points"].tolist()}

@@ -219,6 +219,13 @@ class Config:
         image (:meth:`Pattern.from_image`) gets it too, on top of
         ``pattern_blur`` (their root sum of squares: :attr:`photo_blur`).
         Photo motion (a frame matched to the next) does not use it.
+    ignore : tuple of (x0, y0, x1, y1)
+        Regions of every searched image not to search (image pixels, end
+        exclusive; clipped to each image): the vehicle's own parts in view
+        (a manipulator, a skid), an overlay's fixed readouts, a
+        picture-in-picture inset. Each is filled from the picture around
+        it before the edges are found (its edges, and an object under it,
+        are not seen). Default: none. Photo motion does not use it.
     segment_steps : int
         How many pixels a segment is traced along the edge on each side of
         its key point.
@@ -290,6 +297,7 @@ class Config:
     colour_boost: float = 4.0
     pattern_blur: float = 1.0
     smooth: float = 0.0
+    ignore: tuple = ()
     segment_steps: int = 2
     segment_angle_tol: float = 30.0
     max_segments: int = 10000
@@ -330,6 +338,7 @@ class Config:
         check("min_gradient", lo=0.0)
         check("pattern_blur", lo=0.0, hi=100.0)
         check("smooth", lo=0.0, hi=100.0)
+        object.__setattr__(self, "ignore", _boxes("ignore", self.ignore))
         check("colour_boost", lo=1.0, hi=100.0)
         check("chain_length", lo=0.0, hi=10_000.0)
         for name in ("segment_angle_tol", "angle_tolerance"):
@@ -370,11 +379,39 @@ class Config:
         return dataclasses.replace(self, **changes)
 
 
+def _boxes(name: str, value) -> tuple:
+    """``Config.ignore``'s boxes as a tuple of (x0, y0, x1, y1) whole
+    pixels, or a ParameterError that names it.
+
+    >>> _boxes("ignore", [(10, 20, 30.4, 40)])
+    ((10, 20, 30, 40),)
+    """
+    bad = ParameterError(f"Config.{name}={value!r}: must be boxes (x0, y0, x1, y1) in image "
+                         "pixels, 0 <= x0 < x1 and 0 <= y0 < y1")
+    if isinstance(value, (str, bytes)):
+        raise bad
+    out = []
+    try:
+        for b in value:
+            if isinstance(b, (str, bytes)) or len(b) != 4:
+                raise bad
+            v = [float(c) for c in b]
+            if not all(math.isfinite(c) for c in v):
+                raise bad
+            x0, y0, x1, y1 = (int(round(c)) for c in v)
+            if not (0 <= x0 < x1 and 0 <= y0 < y1):
+                raise bad
+            out.append((x0, y0, x1, y1))
+    except (TypeError, ValueError):
+        raise bad from None
+    return tuple(out)
+
+
 def config_record(config: Config) -> dict:
     """``config`` as plain values for a run's settings (what resuming a run
     compares). Fields added after runs were made are left out while unset
     or at their default (``bit_depth`` None, ``search.hole_support`` 0.4,
-    ``smooth`` 0), so
+    ``smooth`` 0, ``ignore`` none), so
     that those runs can still be continued.
 
     >>> "bit_depth" in config_record(Config()), config_record(Config(bit_depth=12))["bit_depth"]
@@ -391,6 +428,10 @@ def config_record(config: Config) -> dict:
         rec["search"].pop("hole_support")
     if rec.get("smooth") == 0.0:
         rec.pop("smooth")
+    if rec.get("ignore") == ():
+        rec.pop("ignore")
+    elif "ignore" in rec:                         # (as JSON keeps it: lists)
+        rec["ignore"] = [list(b) for b in rec["ignore"]]
     return rec
 
 

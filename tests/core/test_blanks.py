@@ -204,3 +204,43 @@ def test_a_colour_search_does_not_take_a_letterbox_bar_for_a_post():
         res = det.search(frame)
         assert res.blanks.border == (7, 0, 485, 360)
         assert not [d for d in res.detections if d.x < 12 or d.x > 480], colour
+
+
+def test_an_ignored_region_is_filled_smoothly_and_its_object_not_found():
+    """Config.ignore: a region filled from the picture around it (a Coons
+    patch of the smoothed lines around it: no step at its sides, no streaks
+    across it), so an object under it is not found, and one beside it is."""
+    img = np.tile(np.linspace(60, 160, 260, dtype=np.float32), (200, 1))
+    img += np.linspace(0, 30, 200, dtype=np.float32)[:, None]
+    smooth = img.copy()
+    cv2.rectangle(img, (40, 60), (100, 100), 230.0, -1)     # under the region
+    cv2.rectangle(img, (160, 60), (220, 100), 230.0, -1)    # beside it
+    region = (30, 50, 112, 112)
+    blanks = find_blanks(img, [region, (250, 190, 400, 300)])
+    assert blanks.ignored == (region, (250, 190, 260, 200))  # (clipped to the image)
+    out = fill_blanks(img, blanks)
+    x0, y0, x1, y1 = region
+    assert float(np.abs(out[y0:y1, x0:x1] - smooth[y0:y1, x0:x1]).max()) < 3.0
+    assert (out[:, 120:250] == img[:, 120:250]).all()
+    det = seahough.Detector(seahough.Pattern.rectangle(60, 40), max_results=3)
+    plain = det.detect(img)
+    assert sorted(round(d.x) for d in plain) == [70, 190]
+    ignored = seahough.Detector(seahough.Pattern.rectangle(60, 40), max_results=3,
+                                config=seahough.Config(ignore=[region])).search(img)
+    assert [round(d.x) for d in ignored.detections] == [190]
+    assert ignored.blanks.ignored == (region,)
+
+
+def test_a_picture_in_picture_inset_left_out_is_no_post():
+    """A RoboSub frame's picture-in-picture inset: its straight left border
+    is found as a post (a user trial); with the inset left out
+    (Config.ignore), it is not, and nothing else comes in its place."""
+    frame = cv2.imread(str(data_path("objects", "robosub_transdec", "images", "1040.jpg")))
+    pattern = seahough.Pattern.line(55, 3)
+
+    def posts(**cfg):
+        det = seahough.Detector(pattern, angle_range=(60, 120), config=seahough.Config(**cfg))
+        return [(round(d.x), round(d.y)) for d in det.detect(frame)]
+
+    assert any(335 <= x <= 350 for x, _ in posts())
+    assert posts(ignore=[(340, 255, 492, 360)]) == []

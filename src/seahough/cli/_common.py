@@ -218,9 +218,30 @@ def bit_depth_option(f):
                         "too dark to show edges). Default: 16.")(f)
 
 
+def ignore_boxes(ctx, param, values) -> tuple:
+    """``--ignore X0,Y0,X1,Y1`` (repeatable) as boxes, or a usage error that
+    says what is wrong with which.
+
+    >>> ignore_boxes(None, None, ("0,0,140,18", "345, 255, 492, 360"))
+    ((0, 0, 140, 18), (345, 255, 492, 360))
+    """
+    out = []
+    for v in values or ():
+        parts = [p.strip() for p in str(v).split(",")]
+        try:
+            x0, y0, x1, y1 = (int(round(float(p))) for p in parts)
+        except ValueError:
+            raise click.BadParameter(f"{v!r}: must be X0,Y0,X1,Y1, four numbers "
+                                     "(image pixels)") from None
+        if not (0 <= x0 < x1 and 0 <= y0 < y1):
+            raise click.BadParameter(f"{v!r}: must have 0 <= X0 < X1 and 0 <= Y0 < Y1")
+        out.append((x0, y0, x1, y1))
+    return tuple(out)
+
+
 def make_detector(pattern, scale_range, angle_range, max_results, min_score, min_confidence,
                   downscale, keypoints, equalize, polarity, mask, max_nfa=1.0, colour=None,
-                  bit_depth=None, smooth=None):
+                  bit_depth=None, smooth=None, ignore=()):
     """The Detector that the search options of ``seahough detect`` (also
     taken by ``survey detect``) describe; PATTERN as :func:`parse_pattern`.
 
@@ -245,6 +266,8 @@ def make_detector(pattern, scale_range, angle_range, max_results, min_score, min
         cfg_kw["bit_depth"] = int(bit_depth)
     if smooth:
         cfg_kw["smooth"] = float(smooth)
+    if ignore:
+        cfg_kw["ignore"] = tuple(ignore)
     config = Config(**cfg_kw)
     kind, sep, rest = pattern.partition(":")
     if sep and kind.strip().lower() == "curve" and not Path(pattern).is_file():

@@ -76,6 +76,13 @@ def patterns_not_found(res) -> list:
             if not part.detections]
 
 
+def _ignored(res) -> list:
+    """The regions of ``--ignore`` left out of a search (clipped to the
+    image), as JSON: each ``[x0, y0, x1, y1]``; [] for none."""
+    b = getattr(res, "blanks", None)
+    return [list(box) for box in b.ignored] if b is not None else []
+
+
 def _captions(res) -> list:
     """The burned-in captions filled before a search, as JSON: each
     ``[x0, y0, x1, y1]`` (end exclusive, image pixels); [] for none."""

@@ -20,10 +20,10 @@ from ..io.frames import (IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, FrameReader, list_f
                          split_video_ref)
 from ._common import (CurveSearch, _Output, _dumps, _max_nfa_callback, _out_dir, _problem,
                       _progress, _range_callback, bit_depth_option, default_workers,
-                      make_detector, workers_option)
+                      ignore_boxes, make_detector, workers_option)
 from ._records import (CSV_COLUMNS, _best_declined_dict, _best_declined_line, _csv_line,
-                       _captions, _csv_rows, _detection_lines, _frame, best_declined,
-                       patterns_not_found)
+                       _captions, _csv_rows, _detection_lines, _frame, _ignored,
+                       best_declined, patterns_not_found)
 
 # the command's defaults are the library's, so that both give the same results
 _DET = {k: v.default for k, v in inspect.signature(Detector.__init__).parameters.items()}
@@ -290,6 +290,10 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, draw=None, b
               help="Blur each image by this Gaussian sigma (px) before its edges are found: "
               "speckle of sonar images, grain, marine snow (an image pattern gets it too). "
               "Default: none.")
+@click.option("--ignore", "ignore", multiple=True, metavar="X0,Y0,X1,Y1", callback=ignore_boxes,
+              help="A region not to search, image pixels (end exclusive; repeatable): the "
+              "vehicle's own parts in view, a fixed overlay, a picture-in-picture inset. It is "
+              "filled from the picture around it (an object under it is not found).")
 @bit_depth_option
 @click.option("--colour/--grey", "colour", default=None,
               help="Edges from every colour channel of a colour image (an object that differs "
@@ -325,8 +329,8 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, draw=None, b
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar or notes; results only.")
 @workers_option("Images searched at once, in threads; results are printed in the order given")
 def detect(pattern, images, scale_range, angle_range, max_results, min_score, min_confidence,
-           max_nfa, downscale, keypoints, equalize, smooth, bit_depth, colour, polarity, mask,
-           as_json,
+           max_nfa, downscale, keypoints, equalize, smooth, ignore, bit_depth, colour, polarity,
+           mask, as_json,
            as_csv, out, max_width, pictures, quiet, workers):
     """Find PATTERN in each IMAGE.
 
@@ -395,7 +399,8 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     """
     detector = make_detector(pattern, scale_range, angle_range, max_results, min_score,
                              min_confidence, downscale, keypoints, equalize, polarity, mask,
-                             max_nfa=max_nfa, colour=colour, bit_depth=bit_depth, smooth=smooth)
+                             max_nfa=max_nfa, colour=colour, bit_depth=bit_depth, smooth=smooth,
+                             ignore=ignore)
     if max_width is not None and out is None:
         raise click.UsageError("--max-width sizes the pictures of --out: give --out DIR")
     if pictures != PICTURES and out is None:
@@ -457,7 +462,8 @@ def _report(outcomes, bar, say, form: str, quiet: bool) -> tuple[int, int]:
             rec = {"file": name, "width": int(w), "height": int(h), "found": bool(dets),
                    "note": res.note, "detections": [d.to_dict() for d in dets],
                    "best_declined": None if dets else _best_declined_dict(best_declined(res)),
-                   "captions": _captions(res), "time_ms": round(ms, 3)}
+                   "captions": _captions(res), "ignored": _ignored(res),
+                   "time_ms": round(ms, 3)}
             if res.parts:
                 rec["not_found"] = patterns_not_found(res)
             if split_video_ref(name) is not None:

@@ -24,7 +24,8 @@ __all__ = ["survey"]
 
 #: The options of ``seahough detect`` that ``survey detect`` takes too.
 SEARCH_OPTIONS = ("scale_range", "angle_range", "max_results", "min_score", "min_confidence",
-                  "max_nfa", "downscale", "keypoints", "equalize", "smooth", "bit_depth", "colour",
+                  "max_nfa", "downscale", "keypoints", "equalize", "smooth", "ignore", "bit_depth",
+                  "colour",
                   "polarity", "mask")
 #: The options of ``seahough odometry`` that ``survey odometry`` takes too.
 ODOMETRY_OPTIONS = ("metres_per_pixel", "altitude", "focal_px", "scale_range", "angle_range",

@@ -181,11 +181,13 @@ class Caption:
 @dataclass(frozen=True)
 class Blanks:
     """What :func:`fill_blanks` fills: ``border`` the picture without its
-    blank border (x0, y0, x1, y1, end exclusive; :func:`blank_border`) and
-    the burned-in ``captions`` inside it (:func:`caption_boxes`)."""
+    blank border (x0, y0, x1, y1, end exclusive; :func:`blank_border`), the
+    burned-in ``captions`` inside it (:func:`caption_boxes`) and the regions
+    a user asked to leave out (``Config.ignore``, clipped to the image)."""
 
     border: tuple[int, int, int, int]
     captions: tuple[Caption, ...] = ()
+    ignored: tuple[tuple[int, int, int, int], ...] = ()
 
 
 def caption_boxes(image: np.ndarray, border=None) -> tuple[Caption, ...]:
@@ -321,7 +323,7 @@ def _captions_in(image: np.ndarray, region, border, dark: bool) -> list:
     return out
 
 
-def find_blanks(image: np.ndarray) -> Blanks:
+def find_blanks(image: np.ndarray, ignore=()) -> Blanks:
     """The :class:`Blanks` of a frame (grey or colour, levels 0-255 as a
     search sees them: an image in other units, 16-bit levels or floats in
     0-1, is to be scaled to them first, :func:`seahough.io.images.to_gray`).
@@ -338,7 +340,10 @@ def find_blanks(image: np.ndarray) -> Blanks:
         code = cv2.COLOR_BGR2GRAY if image.shape[2] == 3 else cv2.COLOR_BGRA2GRAY
         image = cv2.cvtColor(np.ascontiguousarray(image, np.float32), code)
     border = blank_border(image)
-    return Blanks(border, caption_boxes(image, border))
+    h, w = image.shape[:2]
+    boxes = tuple(b for b in ((max(x0, 0), max(y0, 0), min(x1, w), min(y1, h))
+                              for x0, y0, x1, y1 in ignore) if b[0] < b[2] and b[1] < b[3])
+    return Blanks(border, caption_boxes(image, border), boxes)
 
 
 def fill_blanks(image: np.ndarray, blanks: Blanks | None = None) -> np.ndarray:
@@ -371,6 +376,10 @@ def fill_blanks(image: np.ndarray, blanks: Blanks | None = None) -> np.ndarray:
                 image[c.y0:c.y1, bx0:c.x1] = image[c.y0:c.y1, c.x1:c.x1 + 1]
             elif c.side == "right" and c.x0 > bx0:
                 image[c.y0:c.y1, c.x0:bx1] = image[c.y0:c.y1, c.x0 - 1:c.x0]
+    if blanks.ignored:
+        image = image.copy() if not blanks.captions else image
+        for box in blanks.ignored:
+            _fill_box(image, box)
     border = blanks.border
     if image.ndim == 3 and border != (0, 0) + image.shape[1::-1]:
         h, w = image.shape[:2]
@@ -379,3 +388,58 @@ def fill_blanks(image: np.ndarray, blanks: Blanks | None = None) -> np.ndarray:
         border = (x0 + c if x0 else 0, y0 + c if y0 else 0, x1 - c if x1 < w else w,
                   y1 - c if y1 < h else h)
     return fill_blank_border(image, border)
+
+
+#: Gaussian sigma (px) along the lines around an ignored region before they
+#: are spread across it: a side's texture copied unsmoothed across a region
+#: a hundred pixels deep ran as long straight streaks, "posts" to a line search
+#: (found in a test on a RoboSub frame's picture-in-picture inset)
+FILL_SMOOTH = 4.0
+
+
+def _fill_box(image: np.ndarray, box) -> None:
+    """Fill ``box`` (x0, y0, x1, y1) of ``image`` in place from the lines
+    around it, smoothly (a Coons patch: across from the columns at its left
+    and right, down from the rows above and below it, less their corners'
+    blend): no step at its sides. A side at the image's edge repeats the
+    opposite one; nothing around it at all: left as it is."""
+    x0, y0, x1, y1 = box
+    h, w = image.shape[:2]
+    f = image.astype(np.float32, copy=False)
+
+    def line(a):   # a side's line, smoothed along it: its texture would run across as streaks
+        a = np.ascontiguousarray(a, np.float32).reshape(1, a.shape[0], -1)
+        return cv2.GaussianBlur(a, (0, 0), sigmaX=FILL_SMOOTH, sigmaY=0.01,
+                                borderType=cv2.BORDER_REPLICATE).reshape(a.shape[1:]).squeeze()
+
+    left = line(f[y0:y1, x0 - 1]) if x0 > 0 else None
+    right = line(f[y0:y1, x1]) if x1 < w else None
+    top = line(f[y0 - 1, x0:x1]) if y0 > 0 else None
+    bottom = line(f[y1, x0:x1]) if y1 < h else None
+    u = ((np.arange(x1 - x0, dtype=np.float32) + 1) / (x1 - x0 + 1))[None, :]
+    v = ((np.arange(y1 - y0, dtype=np.float32) + 1) / (y1 - y0 + 1))[:, None]
+    if image.ndim == 3:
+        u, v = u[..., None], v[..., None]
+    across = down = None
+    if left is not None or right is not None:
+        lc = left if left is not None else right
+        rc = right if right is not None else left
+        across = (1 - u) * lc[:, None] + u * rc[:, None]
+    if top is not None or bottom is not None:
+        tr = top if top is not None else bottom
+        br = bottom if bottom is not None else top
+        down = (1 - v) * tr[None, :] + v * br[None, :]
+    if across is None and down is None:
+        return
+    if across is None or down is None:
+        patch = across if down is None else down
+    else:   # the two blends, less what both carry: the corners' blend
+        c00, c01 = 0.5 * (across[0, 0] + down[0, 0]), 0.5 * (across[-1, 0] + down[-1, 0])
+        c10, c11 = 0.5 * (across[0, -1] + down[0, -1]), 0.5 * (across[-1, -1] + down[-1, -1])
+        corner = ((1 - u) * (1 - v) * c00 + u * (1 - v) * c10 + (1 - u) * v * c01
+                  + u * v * c11)
+        patch = across + down - corner
+    if np.issubdtype(image.dtype, np.integer):
+        info = np.iinfo(image.dtype)
+        patch = np.clip(np.rint(patch), info.min, info.max)
+    image[y0:y1, x0:x1] = patch.astype(image.dtype)

@@ -235,7 +235,7 @@ class Detector:
         if features is None and not self.pattern.is_frame:
             # (given features: the caller prepared the image; a frame pattern, in
             # photo motion, is matched to the next frame as both come)
-            blanks = find_blanks(gray)
+            blanks = find_blanks(gray, cfg.ignore)
             gray = prepare_image(gray, cfg, blanks)
         if self._grey is not None and gray.ndim == 2:
             res = self._grey._search_in_grey(gray, features, t0)
@@ -443,7 +443,7 @@ class Detector:
         blanks = None
         if features is None:
             # (the grey and the colour copy filled alike: as the grey one's blanks)
-            blanks = find_blanks(images[min(images)])
+            blanks = find_blanks(images[min(images)], cfg.ignore)
             images = {c: prepare_image(img, cfg, blanks) for c, img in images.items()}
         # each pattern, and the image it is searched in (a grey image has no colour
         # to see: a painted pattern's grey edges then, as searched alone)

@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 
 from ..config import Config
-from .blanks import Blanks, fill_blanks
+from .blanks import Blanks, fill_blanks, find_blanks
 
 
 @dataclass
@@ -79,8 +79,8 @@ def choose_factor(shape: tuple[int, int], config: Config,
 
 def prepare_image(image: np.ndarray, config: Config, blanks: Blanks | None = None) -> np.ndarray:
     """A searched image as the search sees it: what is not the scene filled
-    (:func:`~.blanks.fill_blanks`: a letterbox border, burned-in captions;
-    ``blanks``: those already found) and, with ``Config.smooth``, blurred by
+    (:func:`~.blanks.fill_blanks`: a letterbox border, burned-in captions,
+    the regions of ``Config.ignore``; ``blanks``: those already found) and, with ``Config.smooth``, blurred by
     that Gaussian sigma (speckle, grain). Positions are unchanged.
 
     >>> img = np.zeros((40, 60), np.float32); img[:, 30:] = 200
@@ -88,7 +88,7 @@ def prepare_image(image: np.ndarray, config: Config, blanks: Blanks | None = Non
     >>> float(out[20, 29]) > 0 and float(out[20, 30]) < 200
     True
     """
-    image = fill_blanks(image, blanks)
+    image = fill_blanks(image, find_blanks(image, config.ignore) if blanks is None else blanks)
     if config.smooth > 0:
         image = cv2.GaussianBlur(np.ascontiguousarray(image, np.float32), (0, 0), config.smooth,
                                  borderType=cv2.BORDER_REPLICATE)

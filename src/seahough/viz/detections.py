@@ -449,20 +449,21 @@ def _image_figure(image, max_width, bit_depth=None):
     return fig, ax, disp, colour, (w, h), (iw, ih)
 
 
-def _draw_caption(ax, cap) -> None:
-    """A filled caption's box (:class:`~seahough.core.blanks.Caption`),
-    dashed, with a small note inside it."""
-    x0, y0, x1, y1 = cap.x0 - 0.5, cap.y0 - 0.5, cap.x1 - 0.5, cap.y1 - 0.5
+def _draw_blank(ax, box, side: str, text: str) -> None:
+    """A region the search left out (a caption's box, a region of
+    ``Config.ignore``: (x0, y0, x1, y1)), dashed, with ``text`` beside it
+    on the picture's side (``side``: the image edge it touches, or "")."""
+    x0, y0, x1, y1 = (v - 0.5 for v in box)
     ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="0.85", lw=1.2, ls=(0, (4, 3)),
             path_effects=_THIN_OUTLINE)
     # beside the box, on the picture's side (on it, neither could be read: a user trial)
-    mx, my = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+    my = 0.5 * (y0 + y1)
     x, y, ha, va = {"top": (x0, y1 + 1, "left", "top"), "bottom": (x0, y0 - 1, "left", "bottom"),
                     "left": (x1 + 1, my, "left", "center"),
-                    "right": (x0 - 1, my, "right", "center")}.get(cap.side, (mx, my, "center",
-                                                                               "center"))
-    ax.text(x, y, "caption, not searched", color="0.95", fontsize=7, ha=ha, va=va,
-            clip_on=True, path_effects=_THIN_OUTLINE)
+                    "right": (x0 - 1, my, "right", "center")}.get(side, (x0, y1 + 1, "left",
+                                                                          "top"))
+    ax.text(x, y, text, color="0.95", fontsize=7, ha=ha, va=va, clip_on=True,
+            path_effects=_THIN_OUTLINE)
 
 
 def plot_detections(image, detections, path=None, *, pattern=None, title=None,
@@ -512,7 +513,8 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
         otherwise drawn 16 times too dark).
     blanks : Blanks, optional
         What the search filled before it looked (``SearchResult.blanks``):
-        each burned-in caption's box is drawn dashed, marked "caption, not
+        each burned-in caption's box and each region of ``Config.ignore``
+        is drawn dashed, marked "caption, not searched" or "ignored, not
         searched" (an object under it could not be found).
 
     Returns
@@ -545,9 +547,13 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
     ax.set_ylabel("y (px)")
     detections = list(detections or [])
     anchors = []
-    for cap in (blanks.captions if blanks is not None else ()):
-        _draw_caption(ax, cap)      # (and kept free of the labels, as an object is)
-        anchors.append(np.array([[cap.x0, cap.y0], [cap.x1, cap.y1]], float))
+    left_out = [] if blanks is None else (
+        [((c.x0, c.y0, c.x1, c.y1), c.side, "caption, not searched") for c in blanks.captions]
+        + [(b, "bottom" if b[3] >= h else "top" if b[1] <= 0 else "right" if b[2] >= w else
+            "left" if b[0] <= 0 else "", "ignored, not searched") for b in blanks.ignored])
+    for box, side, text in left_out:
+        _draw_blank(ax, box, side, text)     # (and kept free of the labels, as an object is)
+        anchors.append(np.array([box[:2], box[2:]], float))
     for i, (d, c) in enumerate(zip(detections, colours(detections))):
         is_line = d.kind == "line"
         seg = None
