@@ -950,3 +950,19 @@ def test_a_filled_caption_is_drawn_and_kept_free_of_the_labels(monkeypatch):
     pts = {tuple(p) for p in seen["points"].tolist()}
     assert {(0.0, 0.0), (122.0, 18.0)} <= pts
     assert free(seen["points"], 320, 240)[0] != 0            # (not the top left corner)
+
+
+def test_a_line_s_cross_is_on_the_segment_the_image_shows():
+    """A short post near the top of a frame: its line's reported point (the
+    line's nearest the image centre) lies in open water below it; the "+"
+    of the overlay is drawn on the post's visible segment (a user trial
+    found it in open water)."""
+    img = np.full((240, 320), 60, np.uint8)
+    cv2.rectangle(img, (150, 10), (159, 90), 220, -1)        # a post, rows 10-90
+    found = seahough.Detector(seahough.Pattern.line(80, 10), angle_range=(80, 100),
+                              max_results=1).detect(img)
+    assert len(found) == 1 and found[0].y > 100               # (the reported point: below it)
+    fig = plot.plot_detections(img, found)
+    (cross,) = [ln for ln in fig.axes[0].lines if ln.get_marker() == "+"]
+    x, y = (float(v[0]) for v in cross.get_data())
+    assert 145 <= x <= 165 and 5 <= y <= 95, (x, y)

@@ -563,7 +563,10 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
             for o in d.outline:
                 o, lw, effects = _outline_style(o, iw / w)
                 ax.plot(o[:, 0], o[:, 1], color=c, lw=lw, path_effects=effects)
-        ax.plot([d.x], [d.y], marker="+", ms=_cross_size(ax, d, is_line, (w, h), (iw, ih)),
+        # (a line's "+" on the segment the image shows, nearest its reported point:
+        # that point, the line's nearest the image centre, may lie in open water)
+        cx, cy = _nearest_on(seg, d.x, d.y) if seg is not None else (d.x, d.y)
+        ax.plot([cx], [cy], marker="+", ms=_cross_size(ax, d, is_line, (w, h), (iw, ih)),
                 mew=2.5, color=c, path_effects=_OUTLINE)
         if seg is not None:                 # its label on the segment, nearest the centre
             anchors.append(seg)
