@@ -494,7 +494,13 @@ def test_a_caption_is_listed_and_drawn(tmp_path):
                "140,90,240,160", "--ignore", "300,200,400,300")
     rec = json.loads(proc.stdout)
     assert proc.returncode == 1 and rec["ignored"] == [[140, 90, 240, 160], [300, 200, 320, 240]]
-    for bad in ("1,2,3", "5,0,2,10", "a,b,c,d"):
+    # a curve search says it too (a review found its JSON crashing on "parts")
+    proc = run("detect", "curve:8", tmp_path / "plain.png", "--json", "--ignore", "0,0,50,50")
+    assert json.loads(proc.stdout)["ignored"] == [[0, 0, 50, 50]], proc.stderr
+    # a box clipped to 1 px (a review found a crash)
+    proc = run("detect", "rect:80,50", tmp_path / "plain.png", "--ignore", "319,0,400,50")
+    assert proc.returncode == 0, proc.stderr
+    for bad in ("1,2,3", "5,0,2,10", "a,b,c,d", "0,0,inf,5"):
         proc = run("detect", "rect:80,50", tmp_path / "plain.png", "--ignore", bad)
         assert_one_error_line(proc, "--ignore", bad)
 

@@ -383,8 +383,8 @@ def _boxes(name: str, value) -> tuple:
     """``Config.ignore``'s boxes as a tuple of (x0, y0, x1, y1) whole
     pixels, or a ParameterError that names it.
 
-    >>> _boxes("ignore", [(10, 20, 30.4, 40)])
-    ((10, 20, 30, 40),)
+    >>> _boxes("ignore", [(10, 20.5, 30.4, 40)])
+    ((10, 20, 31, 40),)
     """
     bad = ParameterError(f"Config.{name}={value!r}: must be boxes (x0, y0, x1, y1) in image "
                          "pixels, 0 <= x0 < x1 and 0 <= y0 < y1")
@@ -398,11 +398,13 @@ def _boxes(name: str, value) -> tuple:
             v = [float(c) for c in b]
             if not all(math.isfinite(c) for c in v):
                 raise bad
-            x0, y0, x1, y1 = (int(round(c)) for c in v)
+            # (whole pixels that cover it: a part-covered pixel is left out too)
+            x0, y0 = math.floor(v[0]), math.floor(v[1])
+            x1, y1 = math.ceil(v[2]), math.ceil(v[3])
             if not (0 <= x0 < x1 and 0 <= y0 < y1):
                 raise bad
             out.append((x0, y0, x1, y1))
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise bad from None
     return tuple(out)
 

@@ -244,3 +244,38 @@ def test_a_picture_in_picture_inset_left_out_is_no_post():
 
     assert any(335 <= x <= 350 for x, _ in posts())
     assert posts(ignore=[(340, 255, 492, 360)]) == []
+
+
+@pytest.mark.parametrize("box", [(250, 150, 300, 200), (0, 0, 60, 40), (0, 80, 40, 120),
+                                 (100, 0, 160, 30), (299, 0, 300, 50), (10, 10, 11, 11)])
+def test_an_ignored_region_at_an_edge_or_a_corner_leaves_no_step(box):
+    """A region at the image's edge or corner (an inset, the vehicle's skid),
+    1 px ones too: filled with no step at its sides (a review found 10-65
+    levels at the sides of boxes touching an edge, and a crash at 1 px)."""
+    yy, xx = np.mgrid[0:200, 0:300].astype(np.float32)
+    smooth = 60 + 0.3 * xx + 0.2 * yy + 10 * np.sin(xx / 40)
+    img = smooth.copy()
+    x0, y0, x1, y1 = box
+    img[y0:y1, x0:x1] = 0
+    out = fill_blanks(img, find_blanks(img, [box]))
+    steps = max(float(np.abs(np.diff(out, axis=a)).max()) for a in (0, 1))
+    assert steps < 3.5, steps
+    assert (out[y0:y1, x0:x1] > 40).all()
+
+
+def test_ignored_regions_beside_a_bar_each_other_and_the_whole_image():
+    """Regions that overlap are one (each was filled from the other's lines);
+    one reaching into a letterbox bar is filled from the picture, not the
+    bar; one over the whole image leaves it flat (nothing to search), as the
+    overlay and the JSON say."""
+    img = _scene(240, 320)
+    img[:, :8] = 0.5                                             # a letterbox bar
+    blanks = find_blanks(img, [(0, 100, 60, 140), (50, 120, 90, 180)])
+    assert blanks.border == (10, 0, 320, 240) and blanks.ignored == ((0, 100, 90, 180),)
+    out = fill_blanks(img, blanks)
+    assert float(out[100:180, 10:90].min()) > 40                 # (not from the bar's 0.5)
+    flat = fill_blanks(img, find_blanks(img, [(0, 0, 320, 240)]))
+    assert float(flat.min()) == float(flat.max())
+    res = seahough.Detector(seahough.Pattern.rectangle(60, 40),
+                            config=seahough.Config(ignore=[(0, 0, 320, 240)])).search(img)
+    assert res.detections == [] and res.note == "no edges"

@@ -229,9 +229,11 @@ def ignore_boxes(ctx, param, values) -> tuple:
     for v in values or ():
         parts = [p.strip() for p in str(v).split(",")]
         try:
-            x0, y0, x1, y1 = (int(round(float(p))) for p in parts)
-        except ValueError:
-            raise click.BadParameter(f"{v!r}: must be X0,Y0,X1,Y1, four numbers "
+            a0, b0, a1, b1 = (float(p) for p in parts)
+            # (whole pixels that cover it: a part-covered pixel is left out too)
+            x0, y0, x1, y1 = math.floor(a0), math.floor(b0), math.ceil(a1), math.ceil(b1)
+        except (ValueError, OverflowError):
+            raise click.BadParameter(f"{v!r}: must be X0,Y0,X1,Y1, four finite numbers "
                                      "(image pixels)") from None
         if not (0 <= x0 < x1 and 0 <= y0 < y1):
             raise click.BadParameter(f"{v!r}: must have 0 <= X0 < X1 and 0 <= Y0 < Y1")
@@ -395,11 +397,19 @@ class CurveSearch:
     def search(self, image):
         from types import SimpleNamespace
 
+        from ..core.blanks import find_blanks
         from ..core.curves import find_curves
+        from ..io.images import to_gray
 
-        curves = find_curves(image, self.width, polarity=self.polarity, config=self.config,
+        cfg = self.config
+        # (decoded once here: what was left out, captions and --ignore, is said too)
+        gray = to_gray(image, name=str(image) if isinstance(image, (str, Path)) else "image",
+                       max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb,
+                       bit_depth=cfg.bit_depth)
+        curves = find_curves(gray, self.width, polarity=self.polarity, config=cfg,
                              max_curves=self.max_results, max_nfa=self.max_nfa)
-        return SimpleNamespace(detections=curves, note="", planes=None, features=None)
+        return SimpleNamespace(detections=curves, note="", planes=None, features=None,
+                               blanks=find_blanks(gray, cfg.ignore), parts={})
 
 
 def parse_patterns(spec: str):

@@ -464,7 +464,7 @@ def _report(outcomes, bar, say, form: str, quiet: bool) -> tuple[int, int]:
                    "best_declined": None if dets else _best_declined_dict(best_declined(res)),
                    "captions": _captions(res), "ignored": _ignored(res),
                    "time_ms": round(ms, 3)}
-            if res.parts:
+            if getattr(res, "parts", None):       # (a curve search's result has none)
                 rec["not_found"] = patterns_not_found(res)
             if split_video_ref(name) is not None:
                 rec["frame"] = _frame(name)
@@ -481,8 +481,8 @@ def _report(outcomes, bar, say, form: str, quiet: bool) -> tuple[int, int]:
                 missing = patterns_not_found(res)
                 if missing:     # (several patterns: those that found nothing, and why)
                     say(printable("  not found: " + ", ".join(missing)))
-                    for name in missing if not quiet else ():
-                        near = best_declined(res.parts[name])
+                    for pname in missing if not quiet else ():
+                        near = best_declined(res.parts[pname])
                         if near is not None:
                             say(printable(_best_declined_line(near)))
             else:

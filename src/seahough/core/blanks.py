@@ -330,8 +330,8 @@ def find_blanks(image: np.ndarray, ignore=()) -> Blanks:
 
     >>> img = np.random.default_rng(0).uniform(60, 200, (60, 80)).astype(np.float32)
     >>> img[:, :6] = 0
-    >>> find_blanks(img)
-    Blanks(border=(8, 0, 80, 60), captions=())
+    >>> find_blanks(img, ignore=[(20, 10, 40, 30), (40, 10, 50, 20)])
+    Blanks(border=(8, 0, 80, 60), captions=(), ignored=((20, 10, 50, 30),))
     """
     if image.ndim == 3 and image.shape[2] in (3, 4):
         # (a colour frame's blanks are its grey copy's, as when it is searched in
@@ -341,9 +341,31 @@ def find_blanks(image: np.ndarray, ignore=()) -> Blanks:
         image = cv2.cvtColor(np.ascontiguousarray(image, np.float32), code)
     border = blank_border(image)
     h, w = image.shape[:2]
-    boxes = tuple(b for b in ((max(x0, 0), max(y0, 0), min(x1, w), min(y1, h))
-                              for x0, y0, x1, y1 in ignore) if b[0] < b[2] and b[1] < b[3])
-    return Blanks(border, caption_boxes(image, border), boxes)
+    boxes = [b for b in ((max(x0, 0), max(y0, 0), min(x1, w), min(y1, h))
+                         for x0, y0, x1, y1 in ignore) if b[0] < b[2] and b[1] < b[3]]
+    return Blanks(border, caption_boxes(image, border), _united(boxes))
+
+
+def _united(boxes: list) -> tuple:
+    """Boxes that overlap or touch, joined into their bounding box (each is
+    filled from the lines around it: one box's lines must not lie in
+    another, still to be filled)."""
+    boxes = list(dict.fromkeys(boxes))
+    joined = True
+    while joined:
+        joined = False
+        for i in range(len(boxes)):
+            for j in range(i + 1, len(boxes)):
+                a, b = boxes[i], boxes[j]
+                if a[0] <= b[2] and b[0] <= a[2] and a[1] <= b[3] and b[1] <= a[3]:
+                    boxes[i] = (min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]),
+                                max(a[3], b[3]))
+                    del boxes[j]
+                    joined = True
+                    break
+            if joined:
+                break
+    return tuple(boxes)
 
 
 def fill_blanks(image: np.ndarray, blanks: Blanks | None = None) -> np.ndarray:
@@ -361,9 +383,17 @@ def fill_blanks(image: np.ndarray, blanks: Blanks | None = None) -> np.ndarray:
     (True, True)
     """
     blanks = find_blanks(image) if blanks is None else blanks
-    if blanks.captions:
+    if blanks.ignored or blanks.captions:
         image = image.copy()
-        bx0, by0, bx1, by1 = blanks.border
+    bx0, by0, bx1, by1 = blanks.border
+    # the regions to leave out first, within the picture (the bars are filled
+    # after, from it): a caption beside one is then filled from its fill
+    inner = image[by0:by1, bx0:bx1]
+    for x0, y0, x1, y1 in blanks.ignored:
+        x0, y0, x1, y1 = max(x0, bx0), max(y0, by0), min(x1, bx1), min(y1, by1)
+        if x0 < x1 and y0 < y1:
+            _fill_box(inner, (x0 - bx0, y0 - by0, x1 - bx0, y1 - by0))
+    if blanks.captions:
         m = CHROMA_MARGIN if image.ndim == 3 else 0     # (a colour copy: its smear too)
         for c in blanks.captions:
             c = Caption(c.side, max(c.x0 - m, bx0), max(c.y0 - m, by0), min(c.x1 + m, bx1),
@@ -376,10 +406,6 @@ def fill_blanks(image: np.ndarray, blanks: Blanks | None = None) -> np.ndarray:
                 image[c.y0:c.y1, bx0:c.x1] = image[c.y0:c.y1, c.x1:c.x1 + 1]
             elif c.side == "right" and c.x0 > bx0:
                 image[c.y0:c.y1, c.x0:bx1] = image[c.y0:c.y1, c.x0 - 1:c.x0]
-    if blanks.ignored:
-        image = image.copy() if not blanks.captions else image
-        for box in blanks.ignored:
-            _fill_box(image, box)
     border = blanks.border
     if image.ndim == 3 and border != (0, 0) + image.shape[1::-1]:
         h, w = image.shape[:2]
@@ -399,46 +425,56 @@ FILL_SMOOTH = 4.0
 
 def _fill_box(image: np.ndarray, box) -> None:
     """Fill ``box`` (x0, y0, x1, y1) of ``image`` in place from the lines
-    around it, smoothly (a Coons patch: across from the columns at its left
-    and right, down from the rows above and below it, less their corners'
-    blend): no step at its sides. A side at the image's edge repeats the
-    opposite one; nothing around it at all: left as it is."""
+    around it, smoothly: a Coons patch (the blend across from the columns at
+    its left and right, plus the blend down from the rows above and below
+    it, less the blend of its corners, the ends of those lines), so that no
+    side of it is a step. A side at the image's edge is the straight blend
+    of its two corners (a corner with neither line beside it: the mean of
+    its neighbours); nothing around it at all: the box's own median, flat."""
     x0, y0, x1, y1 = box
     h, w = image.shape[:2]
+    n, m = x1 - x0, y1 - y0
     f = image.astype(np.float32, copy=False)
+    extra = image.shape[2:]                        # () grey, (C,) colour
 
     def line(a):   # a side's line, smoothed along it: its texture would run across as streaks
         a = np.ascontiguousarray(a, np.float32).reshape(1, a.shape[0], -1)
-        return cv2.GaussianBlur(a, (0, 0), sigmaX=FILL_SMOOTH, sigmaY=0.01,
-                                borderType=cv2.BORDER_REPLICATE).reshape(a.shape[1:]).squeeze()
+        out = cv2.GaussianBlur(a, (0, 0), sigmaX=FILL_SMOOTH, sigmaY=0.01,
+                               borderType=cv2.BORDER_REPLICATE)
+        return out.reshape((a.shape[1],) + extra)
 
     left = line(f[y0:y1, x0 - 1]) if x0 > 0 else None
     right = line(f[y0:y1, x1]) if x1 < w else None
     top = line(f[y0 - 1, x0:x1]) if y0 > 0 else None
     bottom = line(f[y1, x0:x1]) if y1 < h else None
-    u = ((np.arange(x1 - x0, dtype=np.float32) + 1) / (x1 - x0 + 1))[None, :]
-    v = ((np.arange(y1 - y0, dtype=np.float32) + 1) / (y1 - y0 + 1))[:, None]
-    if image.ndim == 3:
-        u, v = u[..., None], v[..., None]
-    across = down = None
-    if left is not None or right is not None:
-        lc = left if left is not None else right
-        rc = right if right is not None else left
-        across = (1 - u) * lc[:, None] + u * rc[:, None]
-    if top is not None or bottom is not None:
-        tr = top if top is not None else bottom
-        br = bottom if bottom is not None else top
-        down = (1 - v) * tr[None, :] + v * br[None, :]
-    if across is None and down is None:
+    if left is None and right is None and top is None and bottom is None:
+        image[y0:y1, x0:x1] = np.median(f[y0:y1, x0:x1].reshape((-1,) + extra),
+                                        axis=0).astype(image.dtype)
         return
-    if across is None or down is None:
-        patch = across if down is None else down
-    else:   # the two blends, less what both carry: the corners' blend
-        c00, c01 = 0.5 * (across[0, 0] + down[0, 0]), 0.5 * (across[-1, 0] + down[-1, 0])
-        c10, c11 = 0.5 * (across[0, -1] + down[0, -1]), 0.5 * (across[-1, -1] + down[-1, -1])
-        corner = ((1 - u) * (1 - v) * c00 + u * (1 - v) * c10 + (1 - u) * v * c01
-                  + u * v * c11)
-        patch = across + down - corner
+
+    def mean(*vals):
+        vals = [v for v in vals if v is not None]
+        return sum(vals) / len(vals) if vals else None
+
+    cs = [mean(None if top is None else top[0], None if left is None else left[0]),
+          mean(None if top is None else top[-1], None if right is None else right[0]),
+          mean(None if bottom is None else bottom[0], None if left is None else left[-1]),
+          mean(None if bottom is None else bottom[-1], None if right is None else right[-1])]
+    for k, (a, b) in enumerate(((1, 2), (0, 3), (0, 3), (1, 2))):   # (a corner of the image)
+        if cs[k] is None:
+            cs[k] = mean(cs[a], cs[b])
+    known = [c for c in cs if c is not None]
+    c00, c10, c01, c11 = (c if c is not None else mean(*known) for c in cs)
+    u = ((np.arange(n, dtype=np.float32) + 1) / (n + 1)).reshape((1, n) + (1,) * len(extra))
+    v = ((np.arange(m, dtype=np.float32) + 1) / (m + 1)).reshape((m, 1) + (1,) * len(extra))
+    uu, vv = u[0], v[:, 0]
+    top = (1 - uu) * c00 + uu * c10 if top is None else top
+    bottom = (1 - uu) * c01 + uu * c11 if bottom is None else bottom
+    left = (1 - vv) * c00 + vv * c01 if left is None else left
+    right = (1 - vv) * c10 + vv * c11 if right is None else right
+    patch = ((1 - u) * left[:, None] + u * right[:, None] + (1 - v) * top[None, :]
+             + v * bottom[None, :]
+             - ((1 - u) * (1 - v) * c00 + u * (1 - v) * c10 + (1 - u) * v * c01 + u * v * c11))
     if np.issubdtype(image.dtype, np.integer):
         info = np.iinfo(image.dtype)
         patch = np.clip(np.rint(patch), info.min, info.max)

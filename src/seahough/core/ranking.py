@@ -497,10 +497,10 @@ def search_tests(ctx: SearchContext) -> float:
     line = ctx.pattern.is_line
     width = ctx.pattern.line_width * ctx.factor if line else 0.0
     length = ctx.pattern.line_length * ctx.factor if line else 0.0
-    # (a disc searched at one rotation still counts the rotations asked for:
-    # the calibration of docs/nfa.md was fitted so; counting one, false alarms
-    # of discs and rings on real photos rose from 0.14 to 0.24 a search, with
-    # the bound model of the seventh session)
+    # (a disc searched at one rotation counts a whole turn, whatever range was
+    # asked, Detector._counted_angles: the calibration of docs/nfa.md was
+    # fitted so; counting one, false alarms of discs and rings on real photos
+    # rose from 0.14 to 0.24 a search, with the bound model of the seventh session)
     angles = ctx.asked_angles or ctx.angle_range
     return (log10_tests(area, pf.radius, ctx.scale_range, angles, period, span, width, length)
             + math.log10(ctx.searches))
