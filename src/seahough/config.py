@@ -225,7 +225,8 @@ class Config:
         (a manipulator, a skid), an overlay's fixed readouts, a
         picture-in-picture inset. Each is filled from the picture around
         it before the edges are found (its edges, and an object under it,
-        are not seen). Default: none. Photo motion does not use it.
+        are not seen). Default: none. Photo motion does not use it, nor a
+        search given its features (the caller prepared the image).
     segment_steps : int
         How many pixels a segment is traced along the edge on each side of
         its key point.
@@ -297,7 +298,6 @@ class Config:
     colour_boost: float = 4.0
     pattern_blur: float = 1.0
     smooth: float = 0.0
-    ignore: tuple = ()
     segment_steps: int = 2
     segment_angle_tol: float = 30.0
     max_segments: int = 10000
@@ -313,6 +313,7 @@ class Config:
     max_memory_mb: float = MAX_MEMORY_MB
     bit_depth: int | None = None
     search: SearchTuning = SearchTuning()
+    ignore: tuple = ()      # (last: added after the others, their order kept)
 
     def __post_init__(self) -> None:
         def check(name, **limits):
@@ -379,6 +380,10 @@ class Config:
         return dataclasses.replace(self, **changes)
 
 
+#: the largest coordinate of a box of ``Config.ignore`` (beyond any image)
+MAX_COORD = 1_000_000
+
+
 def _boxes(name: str, value) -> tuple:
     """``Config.ignore``'s boxes as a tuple of (x0, y0, x1, y1) whole
     pixels, or a ParameterError that names it.
@@ -387,8 +392,8 @@ def _boxes(name: str, value) -> tuple:
     ((10, 20, 31, 40),)
     """
     bad = ParameterError(f"Config.{name}={value!r}: must be boxes (x0, y0, x1, y1) in image "
-                         "pixels, 0 <= x0 < x1 and 0 <= y0 < y1")
-    if isinstance(value, (str, bytes)):
+                         f"pixels, 0 <= x0 < x1 <= {MAX_COORD:,} and 0 <= y0 < y1 <= {MAX_COORD:,}")
+    if isinstance(value, (str, bytes, dict)):
         raise bad
     out = []
     try:
@@ -401,7 +406,7 @@ def _boxes(name: str, value) -> tuple:
             # (whole pixels that cover it: a part-covered pixel is left out too)
             x0, y0 = math.floor(v[0]), math.floor(v[1])
             x1, y1 = math.ceil(v[2]), math.ceil(v[3])
-            if not (0 <= x0 < x1 and 0 <= y0 < y1):
+            if not (0 <= x0 < x1 <= MAX_COORD and 0 <= y0 < y1 <= MAX_COORD):
                 raise bad
             out.append((x0, y0, x1, y1))
     except (TypeError, ValueError, OverflowError):

@@ -80,8 +80,9 @@ def choose_factor(shape: tuple[int, int], config: Config,
 def prepare_image(image: np.ndarray, config: Config, blanks: Blanks | None = None) -> np.ndarray:
     """A searched image as the search sees it: what is not the scene filled
     (:func:`~.blanks.fill_blanks`: a letterbox border, burned-in captions,
-    the regions of ``Config.ignore``; ``blanks``: those already found) and, with ``Config.smooth``, blurred by
-    that Gaussian sigma (speckle, grain). Positions are unchanged.
+    the regions of ``Config.ignore``; ``blanks``: those already found) and,
+    with ``Config.smooth``, blurred by that Gaussian sigma (speckle, grain).
+    Positions are unchanged.
 
     >>> img = np.zeros((40, 60), np.float32); img[:, 30:] = 200
     >>> out = prepare_image(img, Config(smooth=2.0))
