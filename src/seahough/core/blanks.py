@@ -264,22 +264,32 @@ def _joined(caps: list, border) -> list:
     """Captions whose boxes (margins included) overlap, joined into one box,
     filled from the edge it touches: a two-line overlay's boxes are filled
     from beyond both, not one from the other."""
-    caps = list(dict.fromkeys(caps))
+    boxes = _merged_boxes([(c.x0, c.y0, c.x1, c.y1) for c in caps], touching=False)
+    return [Caption(_side(*b, border), *b) for b in boxes]
+
+
+def _merged_boxes(boxes: list, touching: bool) -> list:
+    """Boxes (x0, y0, x1, y1, end exclusive) that overlap (``touching``: or
+    touch) joined into their bounding box, until none do."""
+    boxes = list(dict.fromkeys(boxes))
     merged = True
     while merged:
         merged = False
-        for i in range(len(caps)):
-            for j in range(i + 1, len(caps)):
-                a, b = caps[i], caps[j]
-                if a.x0 < b.x1 and b.x0 < a.x1 and a.y0 < b.y1 and b.y0 < a.y1:
-                    box = (min(a.x0, b.x0), min(a.y0, b.y0), max(a.x1, b.x1), max(a.y1, b.y1))
-                    caps[i] = Caption(_side(*box, border), *box)
-                    del caps[j]
+        for i in range(len(boxes)):
+            for j in range(i + 1, len(boxes)):
+                a, b = boxes[i], boxes[j]
+                over = ((a[0] <= b[2] and b[0] <= a[2] and a[1] <= b[3] and b[1] <= a[3])
+                        if touching else
+                        (a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]))
+                if over:
+                    boxes[i] = (min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]),
+                                max(a[3], b[3]))
+                    del boxes[j]
                     merged = True
                     break
             if merged:
                 break
-    return caps
+    return boxes
 
 
 def _captions_in(image: np.ndarray, region, border, dark: bool) -> list:
@@ -343,29 +353,10 @@ def find_blanks(image: np.ndarray, ignore=()) -> Blanks:
     h, w = image.shape[:2]
     boxes = [b for b in ((max(x0, 0), max(y0, 0), min(x1, w), min(y1, h))
                          for x0, y0, x1, y1 in ignore) if b[0] < b[2] and b[1] < b[3]]
-    return Blanks(border, caption_boxes(image, border), _united(boxes))
-
-
-def _united(boxes: list) -> tuple:
-    """Boxes that overlap or touch, joined into their bounding box (each is
-    filled from the lines around it: one box's lines must not lie in
-    another, still to be filled)."""
-    boxes = list(dict.fromkeys(boxes))
-    joined = True
-    while joined:
-        joined = False
-        for i in range(len(boxes)):
-            for j in range(i + 1, len(boxes)):
-                a, b = boxes[i], boxes[j]
-                if a[0] <= b[2] and b[0] <= a[2] and a[1] <= b[3] and b[1] <= a[3]:
-                    boxes[i] = (min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]),
-                                max(a[3], b[3]))
-                    del boxes[j]
-                    joined = True
-                    break
-            if joined:
-                break
-    return tuple(boxes)
+    # (regions that overlap or touch as one: each is filled from the lines around
+    # it, which must not lie in another still to be filled)
+    return Blanks(border, caption_boxes(image, border),
+                  tuple(_merged_boxes(boxes, touching=True)))
 
 
 def fill_blanks(image: np.ndarray, blanks: Blanks | None = None) -> np.ndarray:
