@@ -73,7 +73,9 @@ def _shown(arg: str) -> str:
 def command() -> str:
     """The command that made a page, as run (paths as :func:`_shown` shows them).
 
-    >>> sys.argv = ["bench/x.py", "--cache", "/tmp/run/rs.cache", "--out=/tmp/r.md", "--n", "4"]
+    >>> away = os.path.join(os.path.abspath(os.sep), "elsewhere")   # (a folder outside this one)
+    >>> sys.argv = ["bench/x.py", "--cache", os.path.join(away, "rs.cache"),
+    ...             "--out=" + os.path.join(away, "r.md"), "--n", "4"]
     >>> command()
     'python bench/x.py --cache rs.cache --out=r.md --n 4'
     """
