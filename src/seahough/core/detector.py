@@ -71,8 +71,9 @@ class SearchResult:
     and ``features`` are then those of the best detection's pattern, or of
     the first pattern when none is found; ``planes.pattern`` names it).
     ``blanks`` is what was filled in the image before the search
-    (:class:`~.blanks.Blanks`: its letterbox border, burned-in captions);
-    None when it was searched as given (features given, a frame pattern).
+    (:class:`~.blanks.Blanks`: its letterbox border, burned-in captions,
+    the regions of ``Config.ignore``); None when it was searched as given
+    (features given, a frame pattern).
     """
 
     detections: list
