@@ -353,7 +353,8 @@ class Config:
         if self.bit_depth is not None:
             check("bit_depth", lo=9, hi=16, integer=True)
         if not isinstance(self.search, SearchTuning):
-            raise ParameterError("Config.search must be a seahough.config.SearchTuning")
+            raise ParameterError(f"Config.search={self.search!r}: must be a "
+                                 "seahough.config.SearchTuning")
         if self.voting not in VOTING_MODES:
             raise ParameterError(f"Config.voting={self.voting!r}: must be one of "
                                  f"{', '.join(VOTING_MODES)}")
