@@ -225,19 +225,17 @@ def ignore_boxes(ctx, param, values) -> tuple:
     >>> ignore_boxes(None, None, ("0,0,140,18", "345, 255, 492, 360"))
     ((0, 0, 140, 18), (345, 255, 492, 360))
     """
+    from ..config import MAX_COORD, _boxes
+
     out = []
     for v in values or ():
-        parts = [p.strip() for p in str(v).split(",")]
-        try:
-            a0, b0, a1, b1 = (float(p) for p in parts)
-            # (whole pixels that cover it: a part-covered pixel is left out too)
-            x0, y0, x1, y1 = math.floor(a0), math.floor(b0), math.ceil(a1), math.ceil(b1)
-        except (ValueError, OverflowError):
-            raise click.BadParameter(f"{v!r}: must be X0,Y0,X1,Y1, four finite numbers "
-                                     "(image pixels)") from None
-        if not (0 <= x0 < x1 and 0 <= y0 < y1):
-            raise click.BadParameter(f"{v!r}: must have 0 <= X0 < X1 and 0 <= Y0 < Y1")
-        out.append((x0, y0, x1, y1))
+        try:   # (the numbers judged as Config.ignore judges them: one rule)
+            (box,) = _boxes("ignore", [[float(p) for p in str(v).split(",")]])
+        except (ValueError, SeahoughError):
+            raise click.BadParameter(f"{v!r}: must be X0,Y0,X1,Y1, four numbers (image pixels) "
+                                     f"with 0 <= X0 < X1 <= {MAX_COORD:,} and "
+                                     f"0 <= Y0 < Y1 <= {MAX_COORD:,}") from None
+        out.append(box)
     return tuple(out)
 
 
