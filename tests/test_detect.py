@@ -141,6 +141,32 @@ def test_declined_reasons_of_two_alike_objects():
     assert sum(not c.declined for c in res.candidates) == 2
 
 
+def test_a_detections_own_copy_is_no_look_alike():
+    """A buoy with a highlight: the highlight and the whole buoy are two
+    discs of one object (the second declined as "the same object"). That
+    copy is the runner-up of neither detection: before, both buoys were
+    flagged ambiguous at confidence 0, the second one's against the first
+    buoy's outline (5 of 37 ambiguous buoys of the RoboSub tune part)."""
+    img = np.full((240, 360), 60, np.uint8)
+    cv2.circle(img, (100, 120), 32, 170, -1, lineType=cv2.LINE_AA)   # a buoy
+    cv2.circle(img, (94, 112), 14, 240, -1, lineType=cv2.LINE_AA)    # its highlight
+    cv2.circle(img, (260, 120), 20, 170, -1, lineType=cv2.LINE_AA)   # a second buoy,
+    img[95:106, 235:290] = 60                                        # its top hidden
+    rng = np.random.default_rng(0)
+    img = np.clip(cv2.GaussianBlur(img, (0, 0), 1.0) + rng.normal(0, 6, img.shape), 0, 255)
+    det = seahough.Detector(seahough.Pattern.circle(16), scale_range=(0.5, 2.5),
+                            angle_range=(0, 360), max_results=5)
+    res = det.search(img.astype(np.uint8))
+    copies = [c for c in res.candidates if c.declined == "the same object as a better candidate"]
+    assert copies and all(c.score > 0.9 for c in copies), res.candidates
+    found = {"left" if d.x < 180 else "right": d for d in res.detections}
+    assert set(found) == {"left", "right"}, res.detections
+    for d in found.values():
+        assert "ambiguous" not in d.flags and d.confidence > 0.3, d
+    # the copy's score is above the second buoy's: it would have been its runner-up
+    assert max(c.score for c in copies) > found["right"].score
+
+
 @pytest.mark.parametrize("name", S.MARKERS)
 def test_image_pattern_markers_found_in_moderate_water(name):
     img, mask = S.marker(name, 120)

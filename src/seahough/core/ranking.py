@@ -399,7 +399,8 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
     # noise, JPEG, snow), the full resolution's sharper
     todo.sort(key=lambda c: -(c.full.score + c.work_score))
     accepted: list[Candidate] = []
-    other_object: list[Candidate] = []   # (a disc for a ring: no rival of the ring)
+    # (a disc for a ring, a copy of a detection: no rival of either)
+    other_object: list[Candidate] = []
     s0, s1 = ctx.scale_range
     for c in todo:
         if c.full.score < ctx.min_score:
@@ -414,6 +415,12 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
             continue
         if any(cmp.same(c.full.pose, a.full.pose, 1.0) for a in accepted):
             c.declined = "the same object as a better candidate"
+            if not ctx.pattern.is_frame:
+                # (a detection's own copy, e.g. a smaller disc inside a buoy, is
+                # no look-alike of it nor of another detection; a camera
+                # frame's "same object" spans a third of the frame: a tile of a
+                # tiled floor one period off is a rival there)
+                other_object.append(c)
             continue
         if len(accepted) >= ctx.max_results:
             c.declined = f"max_results {ctx.max_results} reached by better candidates"
