@@ -50,7 +50,7 @@ def test_detect_curve_nothing_there_and_bad_specs(tmp_path, capsys):
     assert _cli(["detect", "curve:8", str(flat), "--out", str(tmp_path / "o"), "-q"]) == 1
     assert (tmp_path / "o" / "flat_overlay.png").exists()
     capsys.readouterr()
-    for spec in ("curve:0", "curve:x", "curve:8,2"):
+    for spec in ("curve:0", "curve:x", "curve:8,2", "curve:8,40,-1", "curve:8,40,60,1"):
         assert _cli(["detect", spec, str(flat)]) == 2
         err = capsys.readouterr().err
         assert "curve:WIDTH" in err and "Traceback" not in err
@@ -92,3 +92,26 @@ def test_smooth_option_takes_the_speckle_off_a_sonar_image(capsys):
     # survey detect takes it too
     from seahough.cli.survey import SEARCH_OPTIONS
     assert "smooth" in SEARCH_OPTIONS
+
+
+def test_a_curve_not_found_names_its_best_candidate_and_the_setting(tmp_path, capsys):
+    """A sonar user's trial: a pipe not found said nothing about why, and the
+    piece and the least length could not be set from the command line."""
+    img = np.full((200, 260), 60, np.uint8)
+    cv2.line(img, (90, 120), (160, 90), 200, 8, lineType=cv2.LINE_AA)   # 81 px of rope
+    img = np.clip(img + np.random.default_rng(0).normal(0, 6, img.shape), 0, 255)
+    path = tmp_path / "short.png"
+    cv2.imwrite(str(path), img.astype(np.uint8))
+    assert _cli(["detect", "curve:8", str(path)]) == 1
+    lines = capsys.readouterr().out.splitlines()
+    assert "not found" in lines[0]
+    assert lines[1].startswith("  best candidate, not reported: ") and lines[1].endswith(
+        "the rope followed from this line is 81 px long, under min_length 96 "
+        "(option curve:WIDTH,PIECE_LENGTH,MIN_LENGTH)"), lines
+    assert _cli(["detect", "curve:8", str(path), "--json"]) == 1
+    best = json.loads(capsys.readouterr().out)["best_declined"]
+    assert best["declined"].endswith("under min_length 96") and best["score"] > 0.7
+    # the least length given: found, 81 px long
+    assert _cli(["detect", "curve:8,32,60", str(path), "--json"]) == 0
+    c = json.loads(capsys.readouterr().out)["detections"][0]
+    assert 70 < c["length"] < 90

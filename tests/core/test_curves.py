@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import math
 
+import cv2
 import numpy as np
 import pytest
 
@@ -86,6 +87,41 @@ def test_a_dark_cable_needs_its_polarity():
     # searched as a bright rope it is not there: nothing (not the "bright band"
     # beside it, whose two borders are the cable's and the seabed's: unbalanced)
     assert seahough.find_curves(img, 8, polarity="bright") == []
+
+
+def _short_band(polarity="bright"):
+    """A straight band 8 px wide and 81 px long: a piece of rope, shorter than
+    the two pieces (96 px) a curve must be by default."""
+    img = np.full((200, 260), 60, np.uint8)
+    cv2.line(img, (90, 120), (160, 90), 200, 8, lineType=cv2.LINE_AA)
+    img = np.clip(img + np.random.default_rng(0).normal(0, 6, img.shape), 0, 255)
+    img = img.astype(np.uint8)
+    return img if polarity == "bright" else 255 - img
+
+
+def test_no_curve_says_why_and_what_to_change():
+    """A user whose rope is not found learns why (a sonar user's trial: the
+    table, JSON and CSV said nothing): ``declined`` receives the seed
+    candidates, best first, each with its reason."""
+    why = []
+    assert seahough.find_curves(_short_band(), 8, declined=why) == []
+    assert why and why[0].declined == ("the rope followed from this line is 81 px long, "
+                                       "under min_length 96"), why[0]
+    assert seahough.find_curves(_short_band(), 8, min_length=60)     # what to change
+    # a dark band searched as a bright rope: a line, but no rope across it
+    why = []
+    assert seahough.find_curves(_short_band("dark"), 8, declined=why) == []
+    assert why[0].declined.startswith("a line, but no rope across it: one border of a "
+                                      "bright band 4-12 px wide"), why[0]
+    assert "--polarity" in why[0].declined
+    # a line whose NFA, counted over both seed searches, is over max_nfa
+    why = []
+    assert seahough.find_curves(_short_band(), 8, max_nfa=1e-30, declined=why) == []
+    assert why and all(c.declined for c in why)
+    assert any("over max_nfa 1e-30" in c.declined for c in why), [c.declined for c in why]
+    # a curve found: nothing declined is said
+    why = []
+    assert seahough.find_curves(arc_image(), 8, declined=why) and why == []
 
 
 def test_dark_cables_searched_as_bright_ropes_give_nothing():

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import click
 
-from .._validate import default_workers
-from ..errors import SeahoughError, without_name
+from .._validate import default_workers, number
+from ..errors import ParameterError, SeahoughError, without_name
 
 PROG = "seahough"
 SHAPES_HELP = ("rect:W,H | line:LENGTH,WIDTH | circle:R | circle:R,INNER (a ring) | "
@@ -206,8 +206,8 @@ _SHAPE_USAGE = {"rect": "rect:W,H (e.g. rect:60,40)", "rectangle": "rect:W,H (e.
                 "polygon": "polygon:x1,y1,x2,y2,x3,y3,...",
                 "poly": "polygon:x1,y1,x2,y2,x3,y3,...",
                 "polyline": "polyline:WIDTH:x1,y1,x2,y2,... (e.g. polyline:6:0,100,0,0,210,0,210,100)",
-                "curve": "curve:WIDTH (e.g. curve:8; a bright rope, --polarity dark for a "
-                         "dark cable)"}
+                "curve": "curve:WIDTH[,PIECE_LENGTH[,MIN_LENGTH]] (e.g. curve:8; a bright "
+                         "rope, --polarity dark for a dark cable)"}
 
 
 def bit_depth_option(f):
@@ -288,7 +288,7 @@ def make_detector(pattern, scale_range, angle_range, max_results, min_score, min
         if max_results > 100:
             raise click.BadParameter(f"{max_results}: at most 100 curves an image",
                                      param_hint="--max-results")
-        return CurveSearch(_curve_width(pattern, rest), _SHAPE_POLARITY[polarity or "bright"],
+        return CurveSearch(*_curve_spec(pattern, rest), _SHAPE_POLARITY[polarity or "bright"],
                            config, max_results, max_nfa)
     given = dict(scale_range=scale_range, angle_range=angle_range, max_results=max_results,
                  min_score=min_score, min_confidence=min_confidence, max_nfa=max_nfa)
@@ -371,13 +371,29 @@ def pattern_options(spec: str):
     return spec, out
 
 
-def _curve_width(spec: str, rest: str) -> float:
-    """The WIDTH of ``curve:WIDTH``."""
+def _curve_spec(spec: str, rest: str) -> tuple:
+    """``(width, piece_length, min_length)`` of
+    ``curve:WIDTH[,PIECE_LENGTH[,MIN_LENGTH]]`` (None: find_curves' default).
+
+    >>> _curve_spec("curve:8", "8"), _curve_spec("curve:8,40,60", "8,40,60")
+    ((8.0, None, None), (8.0, 40.0, 60.0))
+    """
+    from ..core.curves import _check
+
     v = _numbers(rest, spec)
-    if len(v) != 1 or not v[0] > 0:
-        raise click.BadParameter(f"{spec!r}: expected curve:WIDTH (the rope's width in px, "
-                                 "e.g. curve:8)", param_hint="PATTERN")
-    return float(v[0])
+    if not 1 <= len(v) <= 3 or not v[0] > 0:
+        raise click.BadParameter(f"{spec!r}: expected curve:WIDTH[,PIECE_LENGTH[,MIN_LENGTH]] "
+                                 "(px, e.g. curve:8 or curve:8,40,60)",
+                                 param_hint="PATTERN")
+    width, piece, least = (list(map(float, v)) + [None, None])[:3]
+    try:
+        _check(width, (0.5, 1.5), "bright", piece, 25.0, 1, None)
+        if least is not None:
+            number("min_length", least, lo=0.0)
+    except ParameterError as e:
+        raise click.BadParameter(f"{spec!r}: {e} (curve:WIDTH[,PIECE_LENGTH[,MIN_LENGTH]])",
+                                 param_hint="PATTERN") from None
+    return width, piece, least
 
 
 class CurveSearch:
@@ -388,8 +404,9 @@ class CurveSearch:
     parts: dict = {}
     pattern = None
 
-    def __init__(self, width, polarity, config, max_results, max_nfa):
+    def __init__(self, width, piece_length, min_length, polarity, config, max_results, max_nfa):
         self.width, self.polarity, self.config = width, polarity, config
+        self.piece_length, self.min_length = piece_length, min_length
         self.max_results, self.max_nfa = max_results, max_nfa
 
     def search(self, image):
@@ -404,10 +421,14 @@ class CurveSearch:
         gray = to_gray(image, name=str(image) if isinstance(image, (str, Path)) else "image",
                        max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb,
                        bit_depth=cfg.bit_depth)
+        declined: list = []       # (why no curve: the seed candidates' reasons)
         curves = find_curves(gray, self.width, polarity=self.polarity, config=cfg,
-                             max_curves=self.max_results, max_nfa=self.max_nfa)
+                             piece_length=self.piece_length, min_length=self.min_length,
+                             max_curves=self.max_results, max_nfa=self.max_nfa,
+                             declined=declined)
         return SimpleNamespace(detections=curves, note="", planes=None, features=None,
-                               blanks=find_blanks(gray, cfg.ignore), parts={})
+                               blanks=find_blanks(gray, cfg.ignore), parts={},
+                               candidates=declined)
 
 
 def parse_patterns(spec: str):
@@ -503,7 +524,8 @@ def parse_pattern(spec: str, polarity: str | None = None, mask: str | None = Non
                                         polarity=pol)
             return Pattern.polygon([v[i:i + 2] for i in range(0, len(v), 2)], polarity=pol)
         except SeahoughError as e:
-            raise click.BadParameter(f"{spec!r}: {e}", param_hint="PATTERN") from None
+            raise click.BadParameter(f"{spec!r}: {e} (curve:WIDTH[,PIECE_LENGTH[,MIN_LENGTH]])",
+                                 param_hint="PATTERN") from None
     p = Path(spec)
     if not p.exists():
         if sep and len(kind) > 1:

@@ -112,7 +112,8 @@ def _best_declined_dict(c) -> dict | None:
 #: the option that sets what a declined candidate fell short of, by the
 #: words of its reason (a user trial: the reason never named the option)
 _OPTION_OF = (("min_score", "--min-score"), ("max_nfa", "--max-nfa"),
-              ("max_results", "--max-results"), ("min_confidence", "--min-confidence"))
+              ("max_results", "--max-results"), ("min_confidence", "--min-confidence"),
+              ("min_length", "curve:WIDTH,PIECE_LENGTH,MIN_LENGTH"))
 
 
 def _best_declined_line(c) -> str:

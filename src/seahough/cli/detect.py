@@ -345,7 +345,11 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
                          points, e.g. a gate: polyline:6:0,100,0,0,210,0,210,100
       curve:WIDTH        a rope or cable that bends, WIDTH px wide: each
                          found as the polyline of its centre line (searched
-                         alone: not one of several patterns)
+                         alone: not one of several patterns);
+                         curve:WIDTH,PIECE_LENGTH,MIN_LENGTH: the straight
+                         piece followed along it (default 4 x WIDTH, at
+                         least 48) and the shortest curve reported (px;
+                         default two pieces)
     Several patterns at once: NAME=SPEC+NAME=SPEC... (e.g.
     "buoy=circle:16+post=line:120,12"); each detection names its pattern,
     the strongest evidence (lowest nfa) first; -n is per pattern. A

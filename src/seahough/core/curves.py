@@ -59,7 +59,7 @@ they extend a curve and cannot create one. ``Curve.piece_nfa`` keeps them.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
@@ -419,20 +419,28 @@ class _Follower:
 
 
 def _trace(det, res, gray, w, s_range, length, step_cfg, max_turn, step_nfa, others, polarity):
-    """The curve grown from a seed detection, or None when it lies on a
-    curve found before or its point does not show the rope's profile
-    (:data:`_SEED_BALANCE`)."""
+    """The curve grown from a seed detection, or why none was (a str): its
+    point does not show the rope's profile (:data:`_SEED_BALANCE`), or it
+    lies on a curve found before."""
     sx, sy = _seed_position(res, det)
     d = _direction(det.line_angle)
     lo, hi = s_range[0] * w, s_range[1] * w
     m = _profile(gray, sx, sy, d, 0.5 * length, lo, hi, polarity)
     if _SEED_BALANCE is not None and (m is None or m[3] < _SEED_BALANCE):
-        return None      # (no rope's profile at the seed: its borders are not both there)
+        # (no rope's profile at the seed: its borders are not both there)
+        band = f"a {polarity} band {lo:.3g}-{hi:.3g} px wide" if polarity != "either" \
+            else f"a band {lo:.3g}-{hi:.3g} px wide"
+        if m is None:
+            return (f"a line, but no rope across it: no {band} (the width of curve:WIDTH, "
+                    "or --polarity)")
+        return (f"a line, but no rope across it: one border of {band} {m[3]:.2f} as strong "
+                f"as the other (under {_SEED_BALANCE:.2g}: the edge of something wider, or a "
+                "rope of the other --polarity)")
     if m is not None:
         sx, sy = sx - m[1] * d[1], sy + m[1] * d[0]
     wide = m[0] if m is not None else w * float(np.clip(det.scale, *s_range))
     if _near(others, sx, sy, max(wide, 3.0) + 2.0):
-        return None
+        return "on a curve found before"
     # the pieces have the seed's width as its refinement found it: the width
     # its edges show at the working scale, often under the profile's
     track = w * float(np.clip(det.scale, *s_range))
@@ -469,7 +477,7 @@ def _trace(det, res, gray, w, s_range, length, step_cfg, max_turn, step_nfa, oth
 
 def find_curves(image, width, *, width_range=(0.5, 1.5), polarity="bright",
                 piece_length=None, min_length=None, max_turn=25.0, max_curves=3,
-                config=None, max_nfa=1.0) -> list:
+                config=None, max_nfa=1.0, declined: list | None = None) -> list:
     """Find curved ropes, cables or pipes, each as a polyline of its centre line.
 
     Parameters
@@ -501,6 +509,14 @@ def find_curves(image, width, *, width_range=(0.5, 1.5), polarity="bright",
     max_nfa : float
         A curve's seed must have a number of false alarms of at most this
         (a continuation piece: at most ``max_nfa * STEP_NFA_SHARE``).
+    declined : list, optional
+        Receives the seed searches' candidates that made no curve
+        (:class:`~seahough.core.candidates.Candidate`, best first), each
+        saying why in its ``declined``: the seed search's own reasons (e.g.
+        "NFA 3.2 over max_nfa 1"), or, for a line it found, that no rope
+        lies across it, that the rope followed from it is shorter than
+        ``min_length``, or that its NFA, counted over both seed searches,
+        is over ``max_nfa``: what to change when no curve is found.
 
     Returns
     -------
@@ -546,14 +562,39 @@ def find_curves(image, width, *, width_range=(0.5, 1.5), polarity="bright",
                           (0.0, 180.0), config=cfg, max_results=n_seeds, max_nfa=max_nfa)
         res = seeder.search(gray, features=feats)
         feats = res.features                  # the shorter seed: on the same features
-        for det in res.detections:
+        why = {}                              # detection index -> why it made no curve
+        for i, det in enumerate(res.detections):
             if len(curves) >= max_curves:
                 break
             if det.nfa * len(seeds) > max_nfa:
+                why[i] = (f"NFA {det.nfa * len(seeds):.3g} (the line's, counted over the "
+                          f"{len(seeds)} seed searches) over max_nfa {max_nfa:.3g}")
                 continue
             c = _trace(det, res, gray, w, s_range, length, step_cfg, max_turn,
                        max_nfa * STEP_NFA_SHARE, [c.points for c in curves], polarity)
-            if c is not None and c.length >= min_len:
+            if isinstance(c, str):
+                why[i] = c
+            elif c.length < min_len:
+                why[i] = (f"the rope followed from this line is {c.length:.0f} px long, "
+                          f"under min_length {min_len:.0f}")
+            else:
                 c.nfa *= len(seeds)
                 curves.append(c)
+        if declined is not None and not curves:
+            declined.extend(_declined_seeds(res, why))
     return curves
+
+
+def _declined_seeds(res, why: dict) -> list:
+    """The candidates of a seed search ``res`` that made no curve, best first:
+    its declined ones as they are, its detections (accepted candidates) with
+    ``why`` (by detection index) as their reason."""
+    key = lambda c: (round(c.score, 9), round(c.nfa, 12) if math.isfinite(c.nfa) else c.nfa)
+    found = {key(c): c for c in res.candidates if not c.declined}
+    out = []
+    for i, d in enumerate(res.detections):
+        c = found.pop((round(d.score, 9), round(d.nfa, 12) if math.isfinite(d.nfa) else d.nfa),
+                      None)
+        if c is not None and i in why:
+            out.append(replace(c, declined=why[i]))
+    return out + [c for c in res.candidates if c.declined]
