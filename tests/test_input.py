@@ -57,6 +57,38 @@ def test_bit_depth_reads_a_cameras_twelve_bits_in_sixteen_bit_arrays():
     assert to_bgr8(np.full((4, 4), 10, np.uint16)).max() == 0
 
 
+def test_sixteen_bit_data_of_fewer_bits_is_said_once(monkeypatch):
+    """A uint16 image whose values all fit in 12 (or 10) bits, read as 16-bit
+    data, is too dark to show its edges: said once a process for each number
+    of bits, with what to give (a sonar user's trial: a bare "not found")."""
+    import warnings
+
+    from seahough.errors import BitDepthWarning
+    from seahough.io import images
+
+    monkeypatch.setattr(images, "_SAID_BITS", set())
+    g = _scene()
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        to_gray(g.astype(np.uint16) * 16, name="a.png")             # 12 bits: said
+        to_gray(g.astype(np.uint16) * 16, name="b.png")             # (once)
+        to_gray(g.astype(np.uint16) * 4)                            # 10 bits: said
+        to_gray(g.astype(np.uint16) * 16, bit_depth=12)             # its depth given
+        to_gray(g.astype(np.uint16) * 257)                          # 16-bit data
+        to_gray(np.zeros((40, 40), np.uint16))                      # black
+        to_gray(g)                                                  # uint8
+    said = [str(x.message) for x in w if issubclass(x.category, BitDepthWarning)]
+    assert len(said) == 2 and len(w) == 2, [str(x.message) for x in w]
+    assert said[0] == ("a.png: a 16-bit image whose values reach only 3520, read as 16-bit "
+                       "data (levels up to 13.7 of 255: too dark to show most edges); 12-bit "
+                       "samples? give their bit depth: Config(bit_depth=12), CLI --bit-depth 12")
+    assert said[1].startswith("image: a 16-bit image whose values reach only 880") and \
+        "Config(bit_depth=10)" in said[1]
+    # 8-bit levels in a 16-bit array: no bit depth to give
+    with pytest.warns(BitDepthWarning, match="8-bit data in a 16-bit file"):
+        to_gray(g.astype(np.uint16))
+
+
 def test_bit_depth_lets_twelve_bit_frames_be_measured():
     """Real frames saved as a 12-bit camera saves them: read as 16-bit data
     the previous frame has too few edges to be searched for (no motion);

@@ -37,7 +37,7 @@ _WHERE = {
     "solve_segment_pair": ".geometry",
     "SeahoughError": ".errors", "ImageError": ".errors", "ImageReadError": ".errors",
     "ImageSizeError": ".errors", "ImageValueError": ".errors", "ParameterError": ".errors",
-    "PatternError": ".errors", "WriteError": ".errors",
+    "PatternError": ".errors", "WriteError": ".errors", "BitDepthWarning": ".errors",
 }
 
 #: Subpackages and modules reachable as attributes without importing them
@@ -51,7 +51,7 @@ __all__ = [
     "SearchTuning",
     "Similarity", "pose_to_matrix", "matrix_to_pose", "solve_segment_pair", "read_image", "to_gray",
     "SeahoughError", "ImageError", "ImageReadError", "ImageSizeError", "ImageValueError",
-    "ParameterError", "PatternError", "WriteError", "__version__",
+    "ParameterError", "PatternError", "WriteError", "BitDepthWarning", "__version__",
     "Curve", "find_curves",
 ]
 
@@ -72,8 +72,13 @@ def __getattr__(name: str):
     return value
 
 
+#: This module's own helpers, not the package's API (left out of ``dir()``).
+_PLUMBING = frozenset({"TYPE_CHECKING", "annotations", "importlib"})
+
+
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__) | set(_SUBMODULES))
+    own = {n for n in globals() if not n.startswith("_") and n not in _PLUMBING}
+    return sorted(own | set(__all__) | set(_SUBMODULES) | {"__version__"})
 
 
 if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs only
@@ -81,8 +86,9 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs only
     from .core.detector import Detection, Detector, SearchResult
     from .core.pattern import Pattern
     from .core.curves import Curve, find_curves
-    from .errors import (ImageError, ImageReadError, ImageSizeError, ImageValueError,
-                         ParameterError, PatternError, SeahoughError, WriteError)
+    from .errors import (BitDepthWarning, ImageError, ImageReadError, ImageSizeError,
+                         ImageValueError, ParameterError, PatternError, SeahoughError,
+                         WriteError)
     from .geometry import Similarity, matrix_to_pose, pose_to_matrix, solve_segment_pair
     from .io.frames import iter_frames, list_frames
     from .io.images import read_image, to_gray

@@ -15,6 +15,9 @@ Hierarchy::
     ├── PatternError              (ValueError)  the pattern cannot be searched for
     ├── ParameterError            (ValueError)  a parameter is out of range
     └── WriteError                (OSError)     a file or folder cannot be written
+
+and one warning, :class:`BitDepthWarning` (a ``UserWarning``): a 16-bit image
+whose values fit in fewer bits, read as 16-bit data.
 """
 
 from __future__ import annotations
@@ -50,6 +53,13 @@ class ParameterError(SeahoughError, ValueError):
 
 class WriteError(SeahoughError, OSError):
     """A file or folder cannot be written (unwritable folder, a folder in the way...)."""
+
+
+class BitDepthWarning(UserWarning):
+    """A uint16 image whose values all fit in fewer bits (a 10 or 12-bit
+    camera's samples in 16-bit files), read as 16-bit data: 16 or 64 times
+    too dark to show edges. Give ``Config(bit_depth=...)`` (CLI
+    ``--bit-depth``). Said once a process for each number of bits."""
 
 
 def without_name(exc: BaseException, name) -> str:

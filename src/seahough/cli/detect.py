@@ -97,7 +97,7 @@ def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir,
     order by :func:`_run_jobs`), or the SeahoughError of reading it. Runs in a
     worker thread: the kernels release the GIL, and the pictures are drawn on
     their own Agg figures."""
-    from ..io.images import read_image
+    from ..io.images import read_image, say_bits
 
     cfg = detector.config
     t0 = time.perf_counter()
@@ -106,6 +106,8 @@ def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir,
     try:
         img = image if image is not None else read_image(
             name, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
+        if img.dtype.name == "uint16" and cfg.bit_depth is None:   # (said with its file's name)
+            say_bits(int(img.max(initial=0)), name)
         res = detector.search(img)
     except SeahoughError as e:
         return e

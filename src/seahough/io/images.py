@@ -23,6 +23,7 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import warnings
 from pathlib import Path
 
 import cv2
@@ -32,7 +33,8 @@ from PIL import Image
 
 from .._validate import number
 from ..config import MAX_MEMORY_MB
-from ..errors import ImageReadError, ImageSizeError, ImageValueError, ParameterError, WriteError
+from ..errors import (BitDepthWarning, ImageReadError, ImageSizeError, ImageValueError,
+                      ParameterError, WriteError)
 from ._decoders import (_Header, _decode_jpeg, _decode_png, _opencv_decode, _pillow_problem,
                         _quiet_opencv)
 
@@ -384,6 +386,8 @@ def _levels(image, label, max_pixels, min_side, max_memory_mb, orientation,
                     f"{label}: {100.0 * over / a.size:.0f} % of the values are beyond "
                     f"bit_depth={int(bit_depth)} (0-{most}), up to {int(a.max())}: these "
                     f"are wider samples; give their bit depth, or none for 16-bit data")
+        elif most is None:
+            say_bits(int(a.max(initial=0)), label)
         a = a.astype(np.float32)
         a /= uint16_divisor(bit_depth)
         if most is not None:     # (values beyond the stated depth)
@@ -391,6 +395,31 @@ def _levels(image, label, max_pixels, min_side, max_memory_mb, orientation,
     elif a.dtype != np.uint8:
         a = a.astype(np.float32)
     return a
+
+
+#: The numbers of bits :class:`~seahough.errors.BitDepthWarning` was given for.
+_SAID_BITS: set = set()
+
+
+def say_bits(top: int, label: str) -> None:
+    """Warn, once a process for each number of bits, that a uint16 image read
+    as 16-bit data holds values of fewer bits (``top``: its largest; none
+    for an empty or black image, or one reaching 4096 or more)."""
+    if not 0 < top < 4096:
+        return
+    bits = top.bit_length()
+    if bits in _SAID_BITS:
+        return
+    _SAID_BITS.add(bits)
+    if bits <= 8:
+        what = "8-bit data in a 16-bit file? give it as uint8"
+    else:
+        what = (f"{bits}-bit samples? give their bit depth: Config(bit_depth={bits}), "
+                f"CLI --bit-depth {bits}")
+    warnings.warn_explicit(
+        f"{label}: a 16-bit image whose values reach only {top}, read as 16-bit data "
+        f"(levels up to {top / 257.0:.3g} of 255: too dark to show most edges); {what}",
+        BitDepthWarning, "seahough", 0, module="seahough")
 
 
 def uint16_divisor(bit_depth: int | None = None) -> float:
