@@ -167,8 +167,20 @@ def test_detect_csv_holds_what_json_holds(scenes, tmp_path):
     proc = run("detect", "line:200,8", tmp_path / "rope.png", d / "notes.png", "--csv", "-n", 1,
                "--angle-range", 0, 180, "-q")
     assert proc.returncode == 2 and "notes.png" in proc.stderr
-    (r,) = list(csv.DictReader(io.StringIO(proc.stdout)))
-    assert r["kind"] == "line" and r["line_angle"] and r["line_offset"]
+    r, bad = list(csv.DictReader(io.StringIO(proc.stdout)))
+    assert r["kind"] == "line" and r["line_angle"] and r["line_offset"] and r["error"] == ""
+    # ... and its own row (a sonar user's trial: a CSV or JSON Lines reader lost track of
+    # it): the reason in "error", nothing else but the file
+    err = proc.stderr.strip().splitlines()
+    assert len(err) == 1 and err[0] == f"seahough: error: {d / 'notes.png'}: {bad['error']}"
+    assert bad["file"] == str(d / "notes.png") and bad["error"]
+    assert all(v == "" for k, v in bad.items() if k not in ("file", "error"))
+    proc = run("detect", "line:200,8", tmp_path / "rope.png", d / "notes.png", "--json", "-n", 1,
+               "--angle-range", 0, 180, "-q")
+    assert proc.returncode == 2
+    good, bad_rec = (json.loads(line) for line in proc.stdout.splitlines())
+    assert good["found"] is True and "error" not in good
+    assert bad_rec == {"file": str(d / "notes.png"), "found": None, "error": bad["error"]}
 
 
 def test_detect_json_matches_python_api(scenes):
@@ -247,10 +259,13 @@ def test_bad_image_among_good_ones(scenes):
                "--json", "--quiet")
     assert proc.returncode == 2
     recs = [json.loads(line) for line in proc.stdout.strip().splitlines()]
-    assert [Path(r["file"]).name for r in recs] == ["scene.png", "neg.png"]
-    assert recs[0]["found"] and not recs[1]["found"]
+    assert [Path(r["file"]).name for r in recs] == ["scene.png", "notes.png", "neg.png"]
+    assert recs[0]["found"] and recs[2]["found"] is False
     err = proc.stderr.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"seahough: error: {d / 'notes.png'}: ")
+    # the bad file's record: why, as on stderr (found: null, neither true nor false)
+    assert recs[1] == {"file": str(d / "notes.png"), "found": None,
+                       "error": err[0].split(f"{d / 'notes.png'}: ", 1)[1]}
     assert "Traceback" not in proc.stderr
 
 

@@ -501,7 +501,13 @@ def test_bad_files_among_a_good_one_each_get_their_own_line(cli_runs, corpus):
     for line, (f, words) in zip(lines, bad):
         assert line.startswith(f"seahough: error: {corpus / f}: ") and words in line, line
     recs = [json.loads(x) for x in r.stdout.splitlines()]
-    assert [Path(x["file"]).name for x in recs] == ["scene.png"] and recs[0]["found"]
+    good = [x for x in recs if "error" not in x]
+    assert [Path(x["file"]).name for x in good] == ["scene.png"] and good[0]["found"]
+    # each bad file has its record too, its reason as on stderr
+    errs = [(Path(x["file"]).name, x["error"]) for x in recs if "error" in x]
+    assert [f for f, _ in errs] == [f for f, _ in bad]
+    for (f, why), line in zip(errs, lines):
+        assert line == f"seahough: error: {corpus / f}: {why}"
 
 
 # --------------------------------------------------- the pixel limit (bombs)

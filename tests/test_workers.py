@@ -90,7 +90,7 @@ def _detect(capsys, *args):
 def _records(out: str) -> list:
     recs = [json.loads(line) for line in out.splitlines()]
     for r in recs:
-        r.pop("time_ms")
+        r.pop("time_ms", None)     # (a bad file's record has none)
     return recs
 
 
@@ -102,7 +102,11 @@ def test_detect_workers_prints_the_one_worker_results_in_order(images, capsys, t
     assert one[0] == three[0] == 2                      # the bad file
     assert one[2] == three[2] and one[2].count("\n") == 1 and "notes.png" in one[2]
     recs1, recs3 = _records(one[1]), _records(three[1])
-    assert [r["file"] for r in recs3] == [str(p) for p in images if p.name != "notes.png"]
+    assert [r["file"] for r in recs3] == [str(p) for p in images]   # (the bad one: its error)
+    assert [r["file"] for r in recs3 if "error" in r] == [str(p) for p in images
+                                                          if p.name == "notes.png"]
+    assert [r for r in recs1 if "error" in r] == [r for r in recs3 if "error" in r]
+    recs1, recs3 = ([r for r in recs if "error" not in r] for recs in (recs1, recs3))
     for r in recs1 + recs3:            # the pictures' paths differ by the folder only
         for k in ("overlay", "accumulator", "edges"):
             r[k] = r[k].split("/")[-1]

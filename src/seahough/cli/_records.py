@@ -128,11 +128,23 @@ def _best_declined_line(c) -> str:
 
 
 #: The columns of ``detect --csv``: the image's, then a detection's (a
-#: shape's, a line's or a curve's: those that do not apply are empty).
+#: shape's, a line's or a curve's: those that do not apply are empty); the
+#: last, ``error``, is filled only in the one row of an image that could not
+#: be read or searched (every other field but ``file`` and ``frame`` empty).
 CSV_COLUMNS = ("file", "width", "height", "found", "note", "time_ms", "rank", "pattern", "kind",
                "x", "y", "scale", "angle", "score", "confidence", "nfa", "flags", "line_angle",
                "line_offset", "width_px", "length", "votes", "matrix", "points", "declined",
-               "frame")
+               "frame", "error")
+
+
+def error_row(name: str, problem: str) -> str:
+    """The CSV line of an image that could not be read or searched.
+
+    >>> error_row("a.png", "truncated PNG").split(",")[-3:]
+    ['', '', 'truncated PNG']
+    """
+    row = [name] + [""] * (len(CSV_COLUMNS) - 3) + [_frame(name), problem]
+    return _csv_line(row)
 
 
 def _frame(name: str):
@@ -155,15 +167,16 @@ def _csv_rows(name, w, h, note, ms, dets, near=None):
     head = [name, int(w), int(h), "true" if dets else "false", note, round(ms, 3)]
     if not dets:
         why = near.declined if near is not None else ""
-        return [_csv_line(head + [""] * (len(CSV_COLUMNS) - len(head) - 2) + [why, _frame(name)])]
+        return [_csv_line(head + [""] * (len(CSV_COLUMNS) - len(head) - 3)
+                          + [why, _frame(name), ""])]
     out = []
     for rank, d in enumerate(dets, 1):
         rec = d.to_dict()
         rec["width_px"] = rec.pop("width", None)   # (a curve's width, not the image's)
         row = head + [rank]
-        for col in CSV_COLUMNS[7:-2]:
+        for col in CSV_COLUMNS[7:-3]:
             v = rec.get(col)
             row.append("" if v is None else json.dumps(v, separators=(",", ":"))
                        if isinstance(v, (list, tuple, dict)) else v)
-        out.append(_csv_line(row + ["", _frame(name)]))
+        out.append(_csv_line(row + ["", _frame(name), ""]))
     return out

@@ -23,7 +23,7 @@ from ._common import (CurveSearch, _Output, _dumps, _max_nfa_callback, _out_dir,
                       ignore_boxes, make_detector, workers_option)
 from ._records import (CSV_COLUMNS, _best_declined_dict, _best_declined_line, _csv_line,
                        _captions, _csv_rows, _detection_lines, _frame, _ignored,
-                       best_declined, patterns_not_found)
+                       best_declined, error_row, patterns_not_found)
 
 # the command's defaults are the library's, so that both give the same results
 _DET = {k: v.default for k, v in inspect.signature(Detector.__init__).parameters.items()}
@@ -378,7 +378,9 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     draws it dashed. With several patterns, those that found nothing in an
     image are named under its table ("not found: NAME", with their best
     candidate; JSON "not_found"); the image counts as found when one did.
-    A progress bar is shown on stderr for several images
+    An image that cannot be read or searched: one line on stderr, and its
+    own record, {"file": ..., "found": null, "error": WHY} (CSV: a row whose
+    "error" column says why). A progress bar is shown on stderr for several images
     when stderr is a terminal.
 
     \b
@@ -447,7 +449,16 @@ def _report(outcomes, bar, say, form: str, quiet: bool) -> tuple[int, int]:
         if bar is not None:
             bar.update(1)
         if isinstance(done, SeahoughError):
-            say.error(f"{printable(name)}: {printable(_problem(done, name))}")
+            problem = _problem(done, name)
+            say.error(f"{printable(name)}: {printable(problem)}")
+            # (and in the records: a JSON Lines or CSV reader keeps track of every image)
+            if form == "json":
+                rec = {"file": name, "found": None, "error": problem}
+                if split_video_ref(name) is not None:
+                    rec["frame"] = _frame(name)
+                say(_dumps(rec))
+            elif form == "csv":
+                say(error_row(name, problem))
             n_bad += 1
             continue
         res, (h, w), ms, written, failed = done
