@@ -70,12 +70,16 @@ def test_plot_curves_draws_borders_outside_the_rope():
     fig = plot_curves(img, [])
     [note] = [t for t in fig.axes[0].texts if t.get_text() == "not found"]
     assert note.get_position() == (0.02, 0.98)            # a corner, not the middle
-    # a narrow image (155 px drawn pixel for pixel): its list broken into lines that fit
+    # a narrow image (155 px drawn pixel for pixel): its list beside it, not over a
+    # third of it (a sonar user's trial), inside the figure
     narrow = np.full((250, 155), 40, np.uint8)
     fig = plot_curves(narrow, [c], max_width=0)
+    fig.canvas.draw()                                   # (the image placed as drawn)
+    renderer = fig.canvas.get_renderer()
     [box] = [a for a in fig.axes[0].artists]
-    bb = box.get_window_extent(fig.canvas.get_renderer())
-    assert bb.x0 >= 0 and bb.width < 200, bb
+    bb, image = box.get_window_extent(renderer), fig.axes[0].get_window_extent(renderer)
+    assert not bb.overlaps(image) and bb.x0 > image.x1, (bb, image)
+    assert bb.x1 <= fig.bbox.x1 and bb.y0 >= 0, bb
 
 
 def test_smooth_option_takes_the_speckle_off_a_sonar_image(capsys):

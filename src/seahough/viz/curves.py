@@ -8,8 +8,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ._figure import COLOURS, _OUTLINE, _finish
-from .detections import (_LIST_PAD, _free_corners, _image_figure, _image_px, _label_list,
-                         _list_size, _place_label, _wrap_label)
+from .detections import _free_corners, _image_figure, _notes, _place_label
 
 
 def _borders(points: np.ndarray, half: float) -> tuple[np.ndarray, np.ndarray]:
@@ -44,9 +43,10 @@ def plot_curves(image, curves, path=None, *, title=None, max_width=None,
         dashed lines 3 px outside the rope's borders (``width / 2 + 3`` px
         to either side of the centre line, which is drawn thin), so that the
         rope shows between them, numbered at its first point, and listed with its length,
-        width, score and NFA in the image corner farthest from them (lines
-        broken when the image is narrower); "not found" in its top left
-        corner when the list is empty.
+        width, score and NFA in the image corner farthest from them (beside
+        an image too small to hold it, or its lines broken), as
+        :func:`~seahough.viz.plot_detections` places its list; "not found"
+        in its top left corner when the list is empty.
     path : str or Path, optional
         Where to save the PNG.
     title : str, optional
@@ -85,16 +85,12 @@ def plot_curves(image, curves, path=None, *, title=None, max_width=None,
         anchors.append(p)
         _place_label(ax, f"#{i + 1}", p[0, 0], p[0, 1], col, w, h)
         items.append((f"#{i + 1}  " + _curve_label(c), col))
-    if items:
-        corner = _free_corners(np.vstack(anchors), w, h)[0]
-        # (lines wider than the drawn image: broken at their " · ", as in plot_detections)
-        dw = _image_px((w, h), box)[0]
-        if _list_size(fig, items)[0] > 0.96 * dw:
-            items = [(_wrap_label(fig, t, 0.94 * dw - _LIST_PAD), c) for t, c in items]
-        _label_list(ax, items, corner)
-    else:   # (in a corner: the middle is where the rope was looked for)
-        ax.text(0.02, 0.98, "not found", transform=ax.transAxes, ha="left", va="top",
-                color="white", fontsize=20, fontweight="bold", path_effects=_OUTLINE)
+    # the list placed as plot_detections places its own: in the image corner
+    # farthest from the curves, beside an image too small to hold it (a
+    # sonar crop drawn pixel for pixel was a third covered), or its lines
+    # broken; "not found" in a corner (the middle is where the rope was looked for)
+    corners = _free_corners(np.vstack(anchors) if anchors else np.empty((0, 2)), w, h)
+    _notes(fig, ax, items, None, corners, (w, h), box)
     if title is None:
         n = len(curves)
         title = "no curve found" if n == 0 else f"{n} curve{'s' if n > 1 else ''}"

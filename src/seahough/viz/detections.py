@@ -297,8 +297,9 @@ def _fits_beside_object(fig, text, w, h, box_w, box_h) -> bool:
 _CORNER_NOTE = 20
 
 
-def _notes(fig, ax, detections, pattern, corners, wh, box_wh):
-    """The detection list, the "not found" note and the pattern inset.
+def _notes(fig, ax, items, pattern, corners, wh, box_wh):
+    """The detection list (``items``: each line's text and colour), the "not
+    found" note and the pattern inset.
 
     In an image corner when they fit there; next to an image too narrow
     for them (the image is then drawn on the left and they go in the space
@@ -307,9 +308,7 @@ def _notes(fig, ax, detections, pattern, corners, wh, box_wh):
     left, _, bottom, _ = _MARGINS
     fw, fh = fig.get_size_inches() * fig.dpi
     dw, dh = _image_px(wh, box_wh)
-    n = len(detections)
-    items = [((f"#{i + 1} " if n > 1 else "") + _det_label(d), c)
-             for i, (d, c) in enumerate(zip(detections, colours(detections)))]
+    n = len(items)
     lw, lh = _list_size(fig, items) if items else (0.0, 0.0)
     nf_size = 30
     nf_w = _text_size(fig, "not found", fontsize=nf_size, fontweight="bold")[0] + 30
@@ -585,7 +584,10 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
         else:
             _place_label(ax, f"#{i + 1}", lx, ly, c, w, h)
     corners = _free_corners(np.vstack(anchors) if anchors else np.empty((0, 2)), w, h)
-    _notes(fig, ax, detections, pattern, corners, (w, h), (iw, ih))
+    n = len(detections)
+    items = [((f"#{i + 1} " if n > 1 else "") + _det_label(d), c)
+             for i, (d, c) in enumerate(zip(detections, colours(detections)))]
+    _notes(fig, ax, items, pattern, corners, (w, h), (iw, ih))
     if title is None:
         n = len(detections)
         title = "pattern not found" if n == 0 else f"{n} detection{'s' if n > 1 else ''}"
