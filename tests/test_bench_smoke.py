@@ -573,3 +573,18 @@ def test_a_page_s_command_names_no_machine_path(tmp_path):
         "print(_common.command())", timeout=60)
     assert out.strip() == ("python bench/bench_robosub.py --write --cache rs.cache --out=page.md "
                            "bench/peers.py")
+
+
+def test_speckle_benchmark_quick(tmp_path):
+    """bench/bench_speckle.py --quick: every search, counts that fall with e,
+    and streaked speckle's chance lines, which break the bound (docs/speckle.md:
+    the page says so; this fails when they stop doing it, and the page must change)."""
+    text = _quick_page(ROOT / "bench" / "bench_speckle.py", tmp_path / "speckle.md")
+    assert "Machine:" in text and "## Reading" in text
+    rows = _rows(text)[1:]
+    assert [r[1] for r in rows] == ["line:100,6", "rect:150,8", "rect:60,40", "curve:8"]
+    for r in rows:
+        per = [float(c.split()[0]) for c in r[3:7]]
+        assert per == sorted(per, reverse=True), r        # fewer at stricter e
+    line = rows[0]
+    assert "(over)" in line[4] and float(line[7]) < 1e-2, line   # chance lines under 0.1
