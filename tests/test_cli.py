@@ -735,6 +735,46 @@ def test_odometry_command_calls_run_odometry(tmp_path, monkeypatch, capsys):
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
 
 
+@pytest.mark.parametrize("signal_name", ["SIGINT", "SIGTERM"])
+def test_ctrl_c_inside_a_kernel_still_says_what_odometry_kept(tmp_path, monkeypatch, capsys,
+                                                              signal_name):
+    """Ctrl-C that lands inside a compiled kernel surfaces as a SystemError
+    caused by the KeyboardInterrupt: the command still says how many frames
+    were kept and that --resume goes on (a trial saw a bare "interrupted").
+    SIGTERM's own line is kept; a SystemError of another cause is a bug."""
+    from seahough import cli
+    from seahough.cli import _Terminated
+
+    out = tmp_path / "o"
+
+    def fake_run_odometry(frames, out_dir, **kw):
+        Path(out_dir).mkdir()
+        (Path(out_dir) / "odometry.csv").write_text("index,file\n0,a.png\n1,b.png\n2,c.png\n")
+        try:
+            raise KeyboardInterrupt() if signal_name == "SIGINT" else _Terminated()
+        except BaseException as ki:
+            raise SystemError("returned a result with an exception set") from ki
+
+    fake = types.ModuleType("seahough.motion.odometry")
+    fake.run_odometry = fake_run_odometry
+    monkeypatch.setitem(sys.modules, "seahough.motion.odometry", fake)
+    (tmp_path / "frames").mkdir()
+    with pytest.raises(SystemExit) as ex:
+        cli.main(["odometry", str(tmp_path / "frames"), "--out", str(out), "--quiet"])
+    err = capsys.readouterr().err
+    if signal_name == "SIGINT":
+        assert ex.value.code == 130
+        assert err.strip() == (f"seahough: error: interrupted: 3 frames kept in {out}/"
+                               "odometry.csv; the same command with --resume goes on from "
+                               "there"), err
+    else:
+        assert ex.value.code == 143 and "terminated (SIGTERM)" in err and "--resume" in err
+    fake.run_odometry = lambda *a, **k: (_ for _ in ()).throw(SystemError("a bug"))
+    with pytest.raises(SystemError):
+        cli.main(["odometry", str(tmp_path / "frames"), "--out", str(tmp_path / "p"),
+                  "--quiet"])
+
+
 @pytest.mark.parametrize("old_keys", [False, True])
 def test_odometry_command_prints_the_canonical_summary_keys(tmp_path, monkeypatch, capsys,
                                                             old_keys):

@@ -25,7 +25,7 @@ import click
 
 from .. import __version__
 from ..errors import SeahoughError
-from ._common import PROG, _err, _Fail
+from ._common import PROG, _err, _Fail, _interrupted
 
 __all__ = ["cli", "main"]
 
@@ -121,19 +121,6 @@ def cli():
     """
 
 
-def _interrupted(exc: BaseException, kind=KeyboardInterrupt) -> bool:
-    """Is a ``kind`` (a KeyboardInterrupt) among the causes and contexts of ``exc``?"""
-    seen = set()
-    todo = [exc]
-    while todo:
-        e = todo.pop()
-        if e is None or id(e) in seen:
-            continue
-        if isinstance(e, kind):
-            return True
-        seen.add(id(e))
-        todo += [e.__cause__, e.__context__]
-    return False
 
 
 class _Terminated(BaseException):

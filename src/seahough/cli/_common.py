@@ -63,6 +63,34 @@ def _err(msg: str) -> None:
 _problem = without_name
 
 
+def _interrupted(exc: BaseException, kind=KeyboardInterrupt) -> bool:
+    """Is a ``kind`` (a KeyboardInterrupt) among the causes and contexts of ``exc``?
+
+    Ctrl-C inside a compiled (Numba) kernel surfaces as a SystemError caused
+    by the KeyboardInterrupt (raised while the kernel's results are converted).
+
+    >>> try:
+    ...     try:
+    ...         raise KeyboardInterrupt
+    ...     except KeyboardInterrupt as ki:
+    ...         raise SystemError("returned a result with an exception set") from ki
+    ... except SystemError as e:
+    ...     _interrupted(e), _interrupted(e, OSError)
+    (True, False)
+    """
+    seen = set()
+    todo = [exc]
+    while todo:
+        e = todo.pop()
+        if e is None or id(e) in seen:
+            continue
+        if isinstance(e, kind):
+            return True
+        seen.add(id(e))
+        todo += [e.__cause__, e.__context__]
+    return False
+
+
 def _out_dir(out: str) -> Path:
     """The ``--out`` folder, created (a :class:`_Fail` when it cannot be)."""
     o = Path(out)

@@ -10,8 +10,8 @@ import click
 import numpy as np
 
 from ..io.frames import printable
-from ._common import (_Fail, _dumps, _range_callback, _stderr_is_terminal, bit_depth_option,
-                      workers_option)
+from ._common import (_Fail, _dumps, _interrupted, _range_callback, _stderr_is_terminal,
+                      bit_depth_option, workers_option)
 
 
 def _number(v) -> bool:
@@ -142,7 +142,11 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
                               angle_range=angle_range, resume=resume,
                               progress=not quiet and _stderr_is_terminal(),
                               mosaic=not no_mosaic, workers=workers, **_bits(bit_depth))
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, SystemError) as e:
+        # (Ctrl-C inside a compiled kernel is a SystemError caused by it: what
+        # was kept is said the same way; a trial saw a bare "interrupted")
+        if isinstance(e, SystemError) and not _interrupted(e):
+            raise
         raise KeyboardInterrupt(_kept(out)) from None
     return report(result, time.perf_counter() - t0, unit, as_json)
 

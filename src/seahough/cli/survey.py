@@ -18,7 +18,8 @@ from types import SimpleNamespace
 import click
 
 from ..io.frames import printable
-from ._common import _Fail, _dumps, _stderr_is_terminal, make_detector, workers_option
+from ._common import (_Fail, _dumps, _interrupted, _stderr_is_terminal, make_detector,
+                      workers_option)
 
 __all__ = ["survey"]
 
@@ -157,7 +158,11 @@ def detect(pattern, inputs, out, workers, scheduler, batch_size, retry_errors, a
                             scheduler=scheduler, batch_size=batch_size,
                             progress=not quiet and _stderr_is_terminal(),
                             retry_errors=retry_errors)
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, SystemError) as e:
+        # (Ctrl-C inside a compiled kernel is a SystemError caused by it: what
+        # was kept is said the same way; a trial saw a bare "interrupted")
+        if isinstance(e, SystemError) and not _interrupted(e):
+            raise
         raise KeyboardInterrupt(_kept(out)) from None
     errors = _errors(result.images, SHOW_ERRORS) if result.errors else []
     summary = {"images": result.total, "found": result.found, "not_found": result.not_found,
