@@ -334,6 +334,7 @@ def test_bit_depth_option_reads_twelve_bit_files(tmp_path):
     proc = run("odometry", seq, "--out", tmp_path / "o16", "--quiet", "--no-mosaic")
     assert proc.returncode == 1
     assert proc.stderr.count("BitDepthWarning") == 1 and "--bit-depth 12" in proc.stderr
+    assert f"{seq / 'f0.png'}: a 16-bit image" in proc.stderr    # (the frame named)
     with open(tmp_path / "o16" / "odometry.csv", newline="") as fh:
         assert [r["flags"].split(";")[0] for r in csv.DictReader(fh)][1:] == ["few_edges"] * 2
     proc = run("odometry", seq, "--out", tmp_path / "o12", "--quiet", "--bit-depth", "12")
@@ -733,6 +734,18 @@ def test_odometry_command_calls_run_odometry(tmp_path, monkeypatch, capsys):
                   "--metres-per-pixel", "0.01", "--altitude", "2"])
     assert ex.value.code == 2
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
+    assert calls["fps"] is None and "config" not in calls      # (the run's own defaults)
+    # --fps and --equalize (a survey engineer's trial: no way to time frames whose names
+    # carry no time; the cure the flags' table gives for dark frames was Python only)
+    with pytest.raises(SystemExit):
+        cli.main(["odometry", str(tmp_path / "frames"), "--out", str(tmp_path / "o"),
+                  "--fps", "5", "--equalize", "--bit-depth", "12", "--quiet"])
+    assert calls["fps"] == 5.0
+    assert calls["config"].equalize is True and calls["config"].bit_depth == 12
+    for bad in (["--fps", "0"], ["--fps", "nan"]):
+        with pytest.raises(SystemExit) as ex:
+            cli.main(["odometry", str(tmp_path / "frames"), "--out", str(tmp_path / "o"), *bad])
+        assert ex.value.code == 2 and "--fps" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("signal_name", ["SIGINT", "SIGTERM"])

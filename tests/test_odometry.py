@@ -316,6 +316,29 @@ def test_frame_order_and_timestamps(tmp_path):
         list_frames(tmp_path / "missing")
 
 
+def test_fps_times_frames_whose_names_carry_none_and_angles_are_a_turn(tmp_path):
+    """``fps``: the time column of frames without a time in their names (a
+    survey engineer's trial could not fuse a Sparus run with navigation); a
+    name's own time comes first; recorded for --resume only when given. An
+    angle window beyond a turn either way is refused, naming itself."""
+    frames, _ = _sequence("line", n=3, source="procedural")
+    folder = tmp_path / "f"
+    _write_frames(frames, folder)
+    (folder / "frame_002.png").rename(folder / "frame_002_00_00_21.500.png")   # (a time of day)
+    res = run_odometry(folder, tmp_path / "o", progress=False, mosaic=False, fps=4)
+    assert [r["time"] for r in res.rows] == [0.0, 0.25, 21.5]
+    assert json.loads((tmp_path / "o" / "run.json").read_text())["settings"]["fps"] == 4.0
+    res = run_odometry(list(frames), tmp_path / "a", progress=False, mosaic=False)
+    assert [r["time"] for r in res.rows] == [None] * 3                   # (none: as before)
+    assert "fps" not in json.loads((tmp_path / "a" / "run.json").read_text())["settings"]
+    for bad in (0, -1, float("nan"), "5"):
+        with pytest.raises(seahough.ParameterError, match="fps"):
+            run_odometry(folder, tmp_path / "b", progress=False, fps=bad)
+    for bad in ((-400, 400), (-10, 200), (-181, 0)):
+        with pytest.raises(seahough.ParameterError, match=r"angle_range=.*within -180 to 180"):
+            run_odometry(folder, tmp_path / "b", progress=False, angle_range=bad)
+
+
 def test_a_folder_says_what_it_does_not_read(tmp_path, caplog):
     # subfolders (not searched inside), videos and picture formats it cannot
     # read were left out without a word; a navigation log is no frame

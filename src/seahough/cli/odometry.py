@@ -98,6 +98,12 @@ def _finite(ctx, param, value):
 @click.option("--resume", is_flag=True, help="Continue a run interrupted in the same --out "
               "(the same frames and settings only).")
 @click.option("--no-mosaic", is_flag=True, help="Do not build the mosaic.")
+@click.option("--equalize", is_flag=True,
+              help="Local contrast equalisation of every frame (dark, hazy or unevenly lit "
+              "frames flagged no_match or few_edges).")
+@click.option("--fps", type=click.FloatRange(0.0, min_open=True), default=None, callback=_finite,
+              help="Frame rate, for the time column of frames whose names carry no time: "
+              "index / FPS, seconds since the first frame.")
 @bit_depth_option
 @click.option("--quiet", "-q", is_flag=True,
               help="No progress bar (shown on stderr only when it is a terminal).")
@@ -105,7 +111,7 @@ def _finite(ctx, param, value):
 @workers_option("Threads: the pairs are measured in turn while the coming frames are read and "
                 "prepared ahead; the same results for any number")
 def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, angle_range,
-             resume, no_mosaic, bit_depth, quiet, as_json, workers):
+             resume, no_mosaic, equalize, fps, bit_depth, quiet, as_json, workers):
     """Dead reckoning: the camera's path from overlapping frames.
 
     \b
@@ -116,10 +122,42 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
     for in each frame; the accumulator peak is the motion. Positions (x, y)
     are where each frame's centre lies in pixels of the first frame (frame 0
     at its own centre); x_m, y_m with --metres-per-pixel, or --altitude and
-    --focal-px, are metres from frame 0's centre. Columns: docs/odometry.md.
-    Writes odometry.csv, run.json, summary.json, trajectory.png and mosaic.png
-    to --out (a run's files replace an earlier run's there unless --resume;
-    a run into an --out that another run is writing is refused).
+    --focal-px, are metres from frame 0's centre. Writes odometry.csv,
+    run.json, summary.json, trajectory.png and mosaic.png to --out (a run's
+    files replace an earlier run's there unless --resume; a run into an
+    --out that another run is writing is refused).
+
+    \b
+    odometry.csv, a row a frame (more in docs/odometry.md):
+      index, file      the frame's place in the run and its name
+      time             seconds: from a time in its name (since 1970, UTC,
+                       for a date and time; since midnight for a time of
+                       day), a video's frame rate, or index / --fps; empty
+                       when none
+      x, y, x_m, y_m   its centre in frame 0's pixels; in metres from
+                       frame 0's centre
+      heading, scale   its turn since frame 0, degrees, counter-clockwise
+                       as the frames are displayed (unwrapped; a compass,
+                       seen from above, turns the other way), and its size
+                       change since frame 0 (> 1: closer)
+      confidence, nfa, score, overlap   the evidence of its step
+      flags            why a step was not measured (below); empty if it was
+      dx, dy, rotation, scale_change    the scene's motion from the
+                       previous frame (the camera moved the other way)
+      ref, method, status, ms, matrix, pair_matrix   how it was measured,
+                       CPU ms, frame 0 -> frame and previous -> frame
+      frame_hash, settings_hash         what --resume checks
+
+    \b
+    Flags (the first word): no_match (the reference frame not found in
+    this one: another place, blur, a dark frame: try --equalize),
+    low_confidence (a pose no more likely than its runner-up),
+    little_overlap (under 15 % of the reference in view), few_edges (too
+    few edges: open water, bare sand, exposure: try --equalize),
+    unreadable: WHY (no pose at all). A flagged frame's pose is assumed,
+    said as "pose_assumed: constant velocity since frame N" (or zero
+    motion), drawn hollow and left out of the mosaic. Roll and pitch are
+    not measured: a tilt of the camera shows as a sideways shift.
 
     \b
     Exit status: 0 every pair of frames was measured; 1 some frames are
@@ -141,7 +179,8 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
                               altitude=altitude, focal_px=focal_px, scale_range=scale_range,
                               angle_range=angle_range, resume=resume,
                               progress=not quiet and _stderr_is_terminal(),
-                              mosaic=not no_mosaic, workers=workers, **_bits(bit_depth))
+                              mosaic=not no_mosaic, workers=workers, fps=fps,
+                              **_config(bit_depth, equalize))
     except (KeyboardInterrupt, SystemError) as e:
         # (Ctrl-C inside a compiled kernel is a SystemError caused by it: what
         # was kept is said the same way; a trial saw a bare "interrupted")
@@ -162,13 +201,17 @@ def _kept(out) -> str:
             "command with --resume goes on from there")
 
 
-def _bits(bit_depth) -> dict:
-    """``config=`` for a run of ``--bit-depth`` (nothing: the run's default)."""
-    if bit_depth is None:
+def _config(bit_depth, equalize) -> dict:
+    """``config=`` for a run of ``--bit-depth`` and ``--equalize`` (nothing:
+    the run's default, so that runs made before resume as they were)."""
+    if bit_depth is None and not equalize:
         return {}
     from ..config import ODOMETRY_CONFIG
 
-    return {"config": ODOMETRY_CONFIG.replace(bit_depth=int(bit_depth))}
+    changes = {"bit_depth": int(bit_depth)} if bit_depth is not None else {}
+    if equalize:
+        changes["equalize"] = True
+    return {"config": ODOMETRY_CONFIG.replace(**changes)}
 
 
 def check_inputs(frames, metres_per_pixel, altitude, focal_px) -> None:

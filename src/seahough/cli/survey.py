@@ -253,7 +253,7 @@ def odometry(frames, out, workers, scheduler, chunk_size, as_json, quiet, **opts
     2 bad input; 130 interrupted (Ctrl-C), 143 terminated (SIGTERM): the
     chunks done are kept, and the same command goes on where it stopped.
     """
-    from .odometry import _bits, check_inputs, report
+    from .odometry import _config, check_inputs, report
 
     mpp, altitude, focal_px = opts["metres_per_pixel"], opts["altitude"], opts["focal_px"]
     check_inputs(frames, mpp, altitude, focal_px)
@@ -264,7 +264,7 @@ def odometry(frames, out, workers, scheduler, chunk_size, as_json, quiet, **opts
                 metres_per_pixel=mpp, altitude=altitude, focal_px=focal_px,
                 scale_range=opts["scale_range"], angle_range=opts["angle_range"],
                 mosaic=not opts["no_mosaic"], progress=not quiet and _stderr_is_terminal(),
-                **_bits(opts["bit_depth"]))
+                **_config(opts["bit_depth"], False))
     unit = "m" if (mpp is not None or altitude is not None) else "px"
     return report(_odometry_result(paths), time.perf_counter() - t0, unit, as_json)
 

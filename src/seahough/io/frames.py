@@ -405,10 +405,12 @@ class FrameReader:
     asked for an earlier frame; a frame the decoder cannot give is an
     ImageError, and the frames after it are read on)."""
 
-    def __init__(self, items: list, max_pixels: int, max_memory_mb: float = MAX_MEMORY_MB):
+    def __init__(self, items: list, max_pixels: int, max_memory_mb: float = MAX_MEMORY_MB,
+                 fps: float | None = None):
         self.items = items
         self.max_pixels = max_pixels
         self.max_memory_mb = max_memory_mb
+        self.fps = fps   # (frames without a time of their own: index / fps)
         self._cap = None
         self._cap_path = None
         self._cap_next = 0
@@ -428,14 +430,26 @@ class FrameReader:
         return not isinstance(it, np.ndarray) and split_video_ref(str(it)) is not None
 
     def time(self, i: int) -> float | None:
+        """Frame ``i``'s time, seconds: from its name (:func:`time_from_name`),
+        or a video's frame rate; else ``i / fps`` when the reader was given
+        one (seconds since the first frame); else None.
+
+        >>> r = FrameReader(["a.png", "cam_00_00_21.500.png", np.zeros((8, 8))], 100, fps=4)
+        >>> r.time(0), r.time(1), r.time(2), FrameReader(["a.png"], 100).time(0)
+        (0.0, 21.5, 0.5, None)
+        """
         it = self.items[i]
-        if isinstance(it, np.ndarray):
-            return None
-        ref = split_video_ref(str(it))
-        if ref is not None:
-            fps = self._video_fps(ref[0])
-            return ref[1] / fps if fps > 0 else None
-        return time_from_name(str(it))
+        t = None
+        if not isinstance(it, np.ndarray):
+            ref = split_video_ref(str(it))
+            if ref is not None:
+                fps = self._video_fps(ref[0])
+                t = ref[1] / fps if fps > 0 else None
+            else:
+                t = time_from_name(str(it))
+        if t is None and self.fps:
+            t = i / float(self.fps)
+        return t
 
     def _video_fps(self, path: str) -> float:
         if path not in self._fps:

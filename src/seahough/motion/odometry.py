@@ -48,7 +48,7 @@ import time
 
 import numpy as np
 
-from .._validate import check_workers, pair
+from .._validate import check_workers, number, pair
 from ..config import ODOMETRY_CONFIG, Config, OdometryTuning
 from ..core.accumulator import check_ranges
 from ..errors import ParameterError, SeahoughError, WriteError
@@ -77,7 +77,8 @@ _IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal_px=None,
                  scale_range=(0.9, 1.1), angle_range=(-20.0, 20.0), resume=False,
                  progress=True, mosaic=True, config=None,
-                 tuning: OdometryTuning | None = None, workers: int | None = None) -> OdometryResult:
+                 tuning: OdometryTuning | None = None, workers: int | None = None,
+                 fps: float | None = None) -> OdometryResult:
     """Dead reckoning over a sequence of down-looking frames.
 
     Parameters
@@ -129,6 +130,10 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
         Threads (default: all cores): the pairs are measured in turn while the
         coming frames are read and given their features ahead (:mod:`.prefetch`);
         the same rows for any number (1: all in the calling thread, as before).
+    fps : float, optional
+        Frame rate, for the ``time`` column of frames whose names carry no
+        time (and of arrays): ``index / fps``, seconds since the first frame.
+        A time in a frame's name, or a video's own frame rate, comes first.
 
     Returns
     -------
@@ -236,11 +241,18 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
         raise ParameterError("tuning must be a seahough.OdometryTuning")
     scale_range, _ = check_ranges(scale_range, (0.0, 0.0))
     angle_range = pair("angle_range", angle_range)  # kept as given: a window around 0
+    if not (-180.0 <= angle_range[0] <= angle_range[1] <= 180.0):
+        raise ParameterError(f"angle_range={tuple(angle_range)!r}: the turn between two frames, "
+                             "degrees, within -180 to 180 (low <= high; any turn: (-180, 180))")
+    if fps is not None:
+        fps = number("fps", fps, lo=0.0, lo_open=True)
     mpp = resolve_metres_per_pixel(metres_per_pixel, altitude, focal_px)
     workers = check_workers(workers)
     items = list_frames(frames)
-    reader = FrameReader(items, cfg.max_pixels, cfg.max_memory_mb)
+    reader = FrameReader(items, cfg.max_pixels, cfg.max_memory_mb, fps=fps)
     settings = run_settings(scale_range, angle_range, mpp, cfg, tuning)
+    if fps is not None:       # (only when given: runs made before resume as they were)
+        settings["fps"] = float(fps)
     digest = settings_hash(settings)
     columns = CSV_BASE + (CSV_METRIC if mpp else []) + CSV_MORE + CSV_CHECK
     with RunFolder(out_dir) as run:

@@ -67,7 +67,8 @@ def read_frame(reader: FrameReader, i: int, max_pixels: int, max_memory_mb: floa
         raw = reader.raw(i)
         frame_hash = reader.fingerprint(i, raw)
         gray = to_gray(raw, max_pixels=max_pixels, max_memory_mb=max_memory_mb,
-                       bit_depth=bit_depth)
+                       bit_depth=bit_depth,   # (a warning about it names the file)
+                       name="image" if reader.is_array(i) else str(reader.items[i]))
         del raw
         check_motion_size(gray.shape, "frame")
     except (ImageError, OSError) as e:
