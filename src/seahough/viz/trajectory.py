@@ -95,8 +95,10 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
     is assumed (status ``"assumed"`` or a ``pose_assumed`` flag: the motion
     of their pair could not be measured and was carried on from the last
     measured one) are hollow red circles, "pose assumed" in the legend;
-    other frames with flags are red crosses; a few arrows show the heading
-    (0 = up in the first frame, counter-clockwise positive as displayed).
+    other frames with flags are red crosses; flagged frames without a pose
+    (unreadable) are counted in the legend, "no pose, not drawn"; a few
+    arrows show the heading, where the frame's up points (0 = up in the
+    first frame, counter-clockwise positive as displayed).
 
     Returns
     -------
@@ -110,12 +112,13 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
     ...         {"x": 3.0, "y": -4.0, "heading": 10.0, "flags": []},
     ...         {"x": 6.0, "y": -8.0, "heading": None, "flags": ["lost"]},
     ...         {"x": 9.0, "y": -12.0, "heading": None, "status": "assumed",
-    ...          "flags": "no_match; pose_assumed: constant velocity since frame 1"}]
+    ...          "flags": "no_match; pose_assumed: constant velocity since frame 1"},
+    ...         {"x": None, "y": None, "flags": ["unreadable: empty file"]}]
     >>> fig = plot_trajectory(rows, unit="m")   # path=...: also a PNG
     >>> fig.axes[0].get_title()   # (the assumed pose's step not counted)
-    'dead-reckoned path: 4 frames, 10.0 m measured, 2 flagged'
-    >>> [t.get_text() for t in fig.axes[0].get_legend().get_texts()][-3:]
-    ['flagged (1)', 'pose assumed (1)', 'heading']
+    'dead-reckoned path: 5 frames, 10.0 m measured, 3 flagged'
+    >>> [t.get_text() for t in fig.axes[0].get_legend().get_texts()][-4:]
+    ['flagged (1)', 'pose assumed (1)', "heading (the frame's up)", 'no pose, not drawn (1)']
     >>> tuple(int(v) for v in fig.get_size_inches() * fig.dpi)
     (900, 800)
     """
@@ -161,7 +164,10 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
             # heading 0 = up (-y); positive turns counter-clockwise as displayed
             ax.quiver(xs[sel], ys[sel], -np.sin(t) * L, -np.cos(t) * L, angles="xy",
                       scale_units="xy", scale=1, color="#ff9500", width=0.004, zorder=3,
-                      label="heading")
+                      label="heading (the frame's up)")
+        lost = flagged & ~ok    # (unreadable frames: no pose to draw; the title counts them)
+        if lost.any():
+            ax.plot([], [], " ", label=f"no pose, not drawn ({int(lost.sum())})")
     else:
         ax.text(0.5, 0.5, "no positions", transform=ax.transAxes, ha="center", va="center",
                 fontsize=20)
