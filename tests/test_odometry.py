@@ -328,9 +328,11 @@ def test_fps_times_frames_whose_names_carry_none_and_angles_are_a_turn(tmp_path)
     res = run_odometry(folder, tmp_path / "o", progress=False, mosaic=False, fps=4)
     assert [r["time"] for r in res.rows] == [0.0, 0.25, 21.5]
     assert json.loads((tmp_path / "o" / "run.json").read_text())["settings"]["fps"] == 4.0
+    assert res.summary["settings"]["source"] == str(folder)   # (the folder, not a frame)
     res = run_odometry(list(frames), tmp_path / "a", progress=False, mosaic=False)
     assert [r["time"] for r in res.rows] == [None] * 3                   # (none: as before)
     assert "fps" not in json.loads((tmp_path / "a" / "run.json").read_text())["settings"]
+    assert res.summary["settings"]["source"] == "arrays"
     for bad in (0, -1, float("nan"), "5"):
         with pytest.raises(seahough.ParameterError, match="fps"):
             run_odometry(folder, tmp_path / "b", progress=False, fps=bad)

@@ -260,9 +260,17 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
         try:
             return _run(run, reader, items, columns, settings, digest, resume, scale_range,
                         angle_range, mpp, cfg, tuning, progress, mosaic, t_start,
-                        (metres_per_pixel, altitude, focal_px), workers)
+                        (metres_per_pixel, altitude, focal_px, _source(frames)), workers)
         finally:
             reader.close()
+
+
+def _source(frames) -> str | None:
+    """The frames' source for the summary: a folder's or a video's path as
+    given (a list: None, its first frame is named)."""
+    if isinstance(frames, (str, os.PathLike)):
+        return str(frames)
+    return None
 
 
 def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, resume,

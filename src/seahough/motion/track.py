@@ -330,10 +330,14 @@ def resolve_metres_per_pixel(metres_per_pixel, altitude, focal_px):
 
 
 def summarise(t: Totals, items, mpp, scale_range, angle_range, cfg, tuning, n_resumed, wall_s,
-             metres_per_pixel, altitude, focal_px) -> dict:
+             metres_per_pixel, altitude, focal_px, source=None) -> dict:
+    """The run's summary.json (``source``: the frames as the run was given
+    them, when a folder or a video: its path; else the first frame's)."""
     length = t.length
     mean_ms = t.ms_sum / t.ms_n if t.ms_n else None
     src = items[0] if len(items) and not isinstance(items[0], np.ndarray) else "arrays"
+    if source is not None:
+        src = source
     s = {
         "frames": t.frames,
         "measured_pairs": t.measured,
