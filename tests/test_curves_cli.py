@@ -56,6 +56,10 @@ def test_detect_curve_nothing_there_and_bad_specs(tmp_path, capsys):
         assert "curve:WIDTH" in err and "Traceback" not in err
     assert _cli(["detect", "curve:8", str(flat), "--mask", str(flat)]) == 2
     assert "--mask" in capsys.readouterr().err
+    # a shape's bad spec says its own problem, not the curve's syntax (a slip once added it)
+    assert _cli(["detect", "rect:0,40", str(flat)]) == 2
+    err = capsys.readouterr().err
+    assert "width=0.0: must be at least 1 px" in err and "curve" not in err, err
 
 
 def test_plot_curves_draws_borders_outside_the_rope():

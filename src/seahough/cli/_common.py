@@ -552,8 +552,7 @@ def parse_pattern(spec: str, polarity: str | None = None, mask: str | None = Non
                                         polarity=pol)
             return Pattern.polygon([v[i:i + 2] for i in range(0, len(v), 2)], polarity=pol)
         except SeahoughError as e:
-            raise click.BadParameter(f"{spec!r}: {e} (curve:WIDTH[,PIECE_LENGTH[,MIN_LENGTH]])",
-                                 param_hint="PATTERN") from None
+            raise click.BadParameter(f"{spec!r}: {e}", param_hint="PATTERN") from None
     p = Path(spec)
     if not p.exists():
         if sep and len(kind) > 1:
