@@ -89,6 +89,46 @@ def test_sixteen_bit_data_of_fewer_bits_is_said_once(monkeypatch):
         to_gray(g.astype(np.uint16))
 
 
+def test_a_unit_float_image_pushed_over_one_is_still_read_as_one(monkeypatch):
+    """A 0-1 float frame that colour correction pushed a little over 1 (a
+    Python user's trial: one pixel at 1.02 turned a detection into "no
+    edges"): scaled by 255, its values over 1 saturated; float images of
+    another scale are said once each (LevelsWarning), and read as before."""
+    import warnings
+
+    from seahough.errors import LevelsWarning
+    from seahough.io import images
+    from seahough.io.images import to_bgr8
+
+    monkeypatch.setattr(images, "_SAID_LEVELS", set())
+    g = _scene().astype(np.float32)
+    unit = g / 255.0
+    over = unit.copy()
+    over[0, :3] = 1.02
+    assert np.array_equal(to_gray(over)[1:], to_gray(unit)[1:])
+    assert to_gray(over)[0, 0] == 255.0
+    assert np.array_equal(to_bgr8(over)[1:], to_bgr8(unit)[1:])
+    box = seahough.Pattern.rectangle(60, 40)
+    assert seahough.Detector(box).detect(over) and seahough.Detector(box).detect(unit)
+    # more than 5 % over 1, or a value over 2: levels 0-255 as they are (and said)
+    many = unit * 1.25                    # (the bright rectangle: 28 % of the pixels)
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        assert to_gray(many, name="a.tif").max() == pytest.approx(1.25 * 220 / 255)
+        to_gray(unit * 3)                             # (dim again: said once)
+        to_gray(unit * 2 - 1)                         # -1..1
+        to_gray(g * 1000)                             # far over 255
+        to_gray(g)                                    # levels 0-255: nothing to say
+        to_gray(unit)                                 # 0-1: nothing to say
+    said = [str(x.message) for x in w if issubclass(x.category, LevelsWarning)]
+    assert len(w) == len(said) == 3, [str(x.message) for x in w]
+    assert said[0].startswith("a.tif: a float image read as levels 0-255, values only up to "
+                              "1.08 of 255: too dark")
+    assert "values down to -0.686" in said[1] and "values up to 2.2e+05" in said[2]
+    # a frame already in levels is still not copied
+    assert np.shares_memory(to_gray(g), g)
+
+
 def test_bit_depth_lets_twelve_bit_frames_be_measured():
     """Real frames saved as a 12-bit camera saves them: read as 16-bit data
     the previous frame has too few edges to be searched for (no motion);

@@ -38,6 +38,7 @@ _WHERE = {
     "SeahoughError": ".errors", "ImageError": ".errors", "ImageReadError": ".errors",
     "ImageSizeError": ".errors", "ImageValueError": ".errors", "ParameterError": ".errors",
     "PatternError": ".errors", "WriteError": ".errors", "BitDepthWarning": ".errors",
+    "LevelsWarning": ".errors",
 }
 
 #: Subpackages and modules reachable as attributes without importing them
@@ -51,7 +52,8 @@ __all__ = [
     "SearchTuning",
     "Similarity", "pose_to_matrix", "matrix_to_pose", "solve_segment_pair", "read_image", "to_gray",
     "SeahoughError", "ImageError", "ImageReadError", "ImageSizeError", "ImageValueError",
-    "ParameterError", "PatternError", "WriteError", "BitDepthWarning", "__version__",
+    "ParameterError", "PatternError", "WriteError", "BitDepthWarning", "LevelsWarning",
+    "__version__",
     "Curve", "find_curves",
 ]
 
@@ -87,8 +89,8 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs only
     from .core.pattern import Pattern
     from .core.curves import Curve, find_curves
     from .errors import (BitDepthWarning, ImageError, ImageReadError, ImageSizeError,
-                         ImageValueError, ParameterError, PatternError, SeahoughError,
-                         WriteError)
+                         ImageValueError, LevelsWarning, ParameterError, PatternError,
+                         SeahoughError, WriteError)
     from .geometry import Similarity, matrix_to_pose, pose_to_matrix, solve_segment_pair
     from .io.frames import iter_frames, list_frames
     from .io.images import read_image, to_gray

@@ -16,8 +16,9 @@ Hierarchy::
     ├── ParameterError            (ValueError)  a parameter is out of range
     └── WriteError                (OSError)     a file or folder cannot be written
 
-and one warning, :class:`BitDepthWarning` (a ``UserWarning``): a 16-bit image
-whose values fit in fewer bits, read as 16-bit data.
+and two warnings (``UserWarning``): :class:`BitDepthWarning`, a 16-bit image
+whose values fit in fewer bits, read as 16-bit data; :class:`LevelsWarning`, a
+float image whose values look like another scale than 0-1 or 0-255.
 """
 
 from __future__ import annotations
@@ -60,6 +61,13 @@ class BitDepthWarning(UserWarning):
     camera's samples in 16-bit files), read as 16-bit data: 16 or 64 times
     too dark to show edges. Give ``Config(bit_depth=...)`` (CLI
     ``--bit-depth``). Said once a process for each number of bits."""
+
+
+class LevelsWarning(UserWarning):
+    """A float image whose values are taken as levels 0-255 but look like
+    another scale: values under 0 (a -1..1 image), at most 10 (too dark to
+    show edges; a 0-1 image with too many values over 1), or over 1024.
+    Said once a process for each of the three."""
 
 
 def without_name(exc: BaseException, name) -> str:

@@ -34,7 +34,7 @@ from PIL import Image
 from .._validate import number
 from ..config import MAX_MEMORY_MB
 from ..errors import (BitDepthWarning, ImageReadError, ImageSizeError, ImageValueError,
-                      ParameterError, WriteError)
+                      LevelsWarning, ParameterError, WriteError)
 from ._decoders import (_Header, _decode_jpeg, _decode_png, _opencv_decode, _pillow_problem,
                         _quiet_opencv)
 
@@ -279,13 +279,17 @@ def to_gray(image, *, name: str = "image", max_pixels: int = 200_000_000,
     Accepts grey (HxW or HxWx1), BGR or BGRA arrays of dtype uint8, uint16,
     other integers, bool or float. uint16 is divided by 257 (``bit_depth``:
     by ``(2**bit_depth - 1) / 255``, a camera's fewer bits in 16-bit files,
-    then clipped to 255); floats whose
-    maximum is at most 1 are taken as [0, 1] and multiplied by 255. A path
+    then clipped to 255); floats in [0, 1] are multiplied by 255 (so are
+    floats up to :data:`OVERSHOOT` with at most :data:`OVERSHOOT_SHARE` of
+    their values over 1: a 0-1 image pushed a little over 1, saturated at
+    255); other floats are levels 0-255 as they are (a
+    :class:`~seahough.errors.LevelsWarning` when they look like another
+    scale: under 0, at most 10, over 1024). A path
     is read by :func:`read_image` (with ``max_pixels``, ``max_memory_mb``
     and ``orientation``).
 
     An array that is already such an image (C-contiguous HxW float32, levels
-    not all in [0, 1]) is not copied: the result is a read-only view of it
+    0-255, not read as 0-1) is not copied: the result is a read-only view of it
     (a 12 MP frame's copy is 46 MB). Copy it to write into it.
 
     Examples
@@ -365,16 +369,21 @@ def _levels(image, label, max_pixels, min_side, max_memory_mb, orientation,
             raise ImageValueError(f"{label}: contains NaN or infinite values")
         if a.dtype.itemsize > 4 and np.abs(a).max(initial=0) > np.finfo(np.float32).max:
             raise ImageValueError(f"{label}: values beyond +-3.4e38 (float32 range)")
-        if a.dtype == np.float32 and a.flags.c_contiguous and a.ndim == 2 \
-                and not (a.max(initial=0) <= 1.0 and a.min(initial=0) >= 0.0):
+        lo, hi = float(a.min(initial=0)), float(a.max(initial=0))
+        unit = _unit_levels(a, lo, hi)
+        if not unit:
+            say_levels(lo, hi, label)
+        if not unit and a.dtype == np.float32 and a.flags.c_contiguous and a.ndim == 2:
             # already the levels a search works on (a frame cropped and checked
             # before): no copy (a 12 MP frame's is 46 MB), a read-only view
             a = a.view()
             a.flags.writeable = False
             return a
         a = a.astype(np.float32)  # a copy: scaled in place (no second copy)
-        if a.max(initial=0) <= 1.0 and a.min(initial=0) >= 0.0:
+        if unit:
             a *= 255.0
+            if hi > 1.0:      # (a 0-1 image's overshoot: saturated, as 1.0 is)
+                np.minimum(a, 255.0, out=a)
     elif a.dtype == np.uint16:
         most = None if bit_depth is None else 2 ** int(bit_depth) - 1
         if most is not None and int(a.max(initial=0)) > most:
@@ -395,6 +404,56 @@ def _levels(image, label, max_pixels, min_side, max_memory_mb, orientation,
     elif a.dtype != np.uint8:
         a = a.astype(np.float32)
     return a
+
+
+#: A float image whose values lie in [0, 1] is scaled to 0-255; so is one
+#: whose largest value is at most :data:`OVERSHOOT` and at most
+#: :data:`OVERSHOOT_SHARE` of whose values are over 1 (a 0-1 image that colour
+#: correction or dehazing pushed a little over 1: its values over 1 saturate
+#: at 255). Any other float image is taken as levels 0-255 as it is.
+OVERSHOOT = 2.0
+OVERSHOOT_SHARE = 0.05
+
+
+def _unit_levels(a: np.ndarray, lo: float, hi: float) -> bool:
+    """Whether float image ``a`` (its least and largest values ``lo``,
+    ``hi``) holds 0-1 levels (see :data:`OVERSHOOT`).
+
+    >>> img = np.full((10, 10), 0.5, np.float32); img[0, 0] = 1.02
+    >>> _unit_levels(img, 0.0, 1.02), _unit_levels(img * 255, 0.0, 260.1)
+    (True, False)
+    """
+    if lo < 0.0 or hi > OVERSHOOT:
+        return False
+    return bool(hi <= 1.0 or np.count_nonzero(a > 1.0) <= OVERSHOOT_SHARE * a.size)
+
+
+#: The kinds of float levels :class:`~seahough.errors.LevelsWarning` was given for.
+_SAID_LEVELS: set = set()
+
+
+def say_levels(lo: float, hi: float, label: str) -> None:
+    """Warn, once a process for each kind, that a float image taken as levels
+    0-255 (values ``lo`` to ``hi``) looks like another scale: values under
+    0, a largest value of at most 10 (a dark frame, or a 0-1 image with too
+    many values over 1 to be read as one), or over 1024."""
+    if lo < 0.0:
+        kind, why = "negative", f"values down to {lo:.3g}: below 0 is black"
+    elif hi <= 10.0:
+        kind, why = "dim", (f"values only up to {hi:.3g} of 255: too dark to show most edges "
+                            f"(a 0-1 image is scaled only when at most "
+                            f"{100 * OVERSHOOT_SHARE:g} % of its values are over 1, up to "
+                            f"{OVERSHOOT:g})")
+    elif hi > 1024.0:
+        kind, why = "large", f"values up to {hi:.3g}: far over 255, every edge is strong"
+    else:
+        return
+    if kind in _SAID_LEVELS:
+        return
+    _SAID_LEVELS.add(kind)
+    warnings.warn_explicit(
+        f"{label}: a float image read as levels 0-255, {why}; scale it to 0-1 or 0-255",
+        LevelsWarning, "seahough", 0, module="seahough")
 
 
 #: The numbers of bits :class:`~seahough.errors.BitDepthWarning` was given for.
@@ -446,8 +505,8 @@ def to_bgr8(image, bit_depth: int | None = None) -> np.ndarray:
 
     Grey (HxW or HxWx1), BGR and BGRA arrays are accepted. uint8 is kept
     as it is; uint16 is divided by 257 (or as ``bit_depth``-bit data,
-    :func:`uint16_divisor`); floats whose maximum is at most 1 are
-    taken as [0, 1] and multiplied by 255, other floats and integers are
+    :func:`uint16_divisor`); floats read as 0-1 levels (as :func:`to_gray`
+    reads them) are multiplied by 255, other floats and integers are
     clipped to [0, 255] (NaN becomes 0).
 
     Examples
@@ -467,7 +526,7 @@ def to_bgr8(image, bit_depth: int | None = None) -> np.ndarray:
         a = np.minimum(a.astype(np.float32) / uint16_divisor(bit_depth), 255.0).astype(np.uint8)
     if a.dtype != np.uint8:
         a = a.astype(np.float32)
-        if a.size and np.nanmax(a) <= 1.0:
+        if a.size and _unit_levels(a, float(np.nanmin(a)), float(np.nanmax(a))):
             a = a * 255.0
         a = np.clip(np.nan_to_num(a), 0, 255).astype(np.uint8)
     if a.ndim == 2:
