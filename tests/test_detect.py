@@ -202,6 +202,29 @@ def test_detection_fields_follow_the_api_conventions():
     assert abs(grey[inside].mean() - 230) < 15
 
 
+def test_results_compare_by_value():
+    """``==`` of detections, motions and curves compares their values (a
+    Python user's trial: equal detections raised numpy's "truth value of an
+    array is ambiguous"); a SearchResult is equal only to itself."""
+    from seahough.core.curves import Curve
+
+    pattern = seahough.Pattern.rectangle(90, 50)
+    scene = S.marker_scene("board", seed=1, source="procedural")[0]
+    det = seahough.Detector(pattern, max_results=2)
+    a, b = det.detect(scene), det.detect(scene)
+    assert a and a == b and a[0] == b[0] and not (a[0] != b[0])
+    moved = seahough.Detection(**{**a[0].__dict__, "matrix": a[0].matrix + 1.0})
+    assert moved != a[0] and a[0] != "a detection"
+    with pytest.raises(TypeError):
+        hash(a[0])                               # (mutable: unhashable, as before)
+    prev, cur, _ = S.frame_pair(seed=1, source="procedural")
+    assert seahough.estimate_motion(prev, cur) == seahough.estimate_motion(prev, cur)
+    c = Curve(np.array([[0.0, 1.0], [5.0, 1.0]]), 4.0, 0.8, float("nan"), 0.5)
+    assert c == Curve(np.array([[0.0, 1.0], [5.0, 1.0]]), 4.0, 0.8, float("nan"), 0.5)
+    r = det.search(scene)
+    assert r == r and r != det.search(scene)    # (identity: it holds the planes and features)
+
+
 def test_nothing_confident_found_where_the_pattern_is_absent():
     img, mask = S.marker("board", 120)
     det = seahough.Detector(seahough.Pattern.from_image(img, mask=mask))

@@ -65,6 +65,7 @@ import cv2
 import numpy as np
 
 from .._validate import check_max_nfa, number, pair
+from .._values import ValueEquality
 from ..config import Config
 from ..errors import ParameterError
 from ..io.images import to_gray
@@ -82,8 +83,7 @@ FLAG_LEAVES_IMAGE = "leaves_image"
 FLAG_GAP = "gap_bridged"
 #: Flag: the following stopped at the most pieces allowed, not at an end.
 FLAG_MAX_PIECES = "max_pieces_reached"
-#: A continuation piece is accepted when its NFA is at most this share of
-#: ``max_nfa``.
+#: A continuation piece is accepted when its NFA is at most this share of ``max_nfa``.
 STEP_NFA_SHARE = 0.01
 
 _MAX_PIECES = 200        # per curve, each way: 200 half pieces of 40 px = 4000 px
@@ -108,8 +108,8 @@ _STEP_PROFILE = True     # a step's point must show the rope's two borders
 _SEED_BALANCE = 0.5
 
 
-@dataclass
-class Curve:
+@dataclass(eq=False)
+class Curve(ValueEquality):
     """A curved rope, cable or pipe found in an image.
 
     Attributes

@@ -53,7 +53,7 @@ SEARCH_NOTES = ("", "no edges", "pattern larger than the image",
                 "search_region is outside the image")
 
 
-@dataclass
+@dataclass(eq=False)
 class SearchResult:
     """Everything one search produced: the detections and how it got there.
 

@@ -15,6 +15,7 @@ import cv2
 import numpy as np
 
 from . import kernels as K
+from .._values import ValueEquality
 from ..geometry import apply_matrix, pose_to_matrix
 from .candidates import Candidate, SearchContext, icp_subset
 from .features import Features
@@ -50,8 +51,8 @@ CAPTURE = 0.1
 RESCALE = 1.12
 
 
-@dataclass
-class Detection:
+@dataclass(eq=False)
+class Detection(ValueEquality):
     """One instance of the pattern found in an image.
 
     Attributes

@@ -21,6 +21,7 @@ from .perspective import check_perspective, judge_homography, shared_agreement
 from .pyramid import CoarseVote, coarse_to_fine, coarse_vote, ladder
 from .repeats import resolve
 from .._validate import check_max_nfa, number
+from .._values import ValueEquality
 from ..io.images import to_gray
 from .framing import MIN_MOTION_SIDE, check_motion_size, content_box  # noqa: F401  (their home was here)
 
@@ -65,8 +66,8 @@ REPEATED = 0.27
 SHIFTED = 1.0
 
 
-@dataclass
-class Motion:
+@dataclass(eq=False)
+class Motion(ValueEquality):
     """Motion of the image content from the previous frame to the current one.
 
     Attributes
