@@ -1,8 +1,10 @@
 import math
+import re
 
 import numpy as np
 import pytest
 
+import seahough
 from seahough.geometry import (apply_matrix, compose, invert_matrix, matrix_to_pose,
                                pose_to_matrix, solve_segment_pair)
 
@@ -66,3 +68,25 @@ def test_matrix_pose_round_trip_and_warpaffine_convention(rng):
 def test_degenerate_segment_is_refused():
     with pytest.raises(ValueError):
         solve_segment_pair((1, 1), (1, 1), (0, 0), (1, 0))
+
+
+def test_bad_arguments_of_similarity_are_parameter_errors():
+    """A Python user's trial: an array where a Similarity was expected, a
+    Parquet table's flat matrix, a 2x2 matrix, a zero scale's inverse and
+    3-column points raised AttributeError, IndexError, ZeroDivisionError
+    and ValueError from inside the package."""
+    from seahough.geometry import Similarity
+
+    s = Similarity.from_pose(10.0, 5.0, 2.0, 30.0)
+    assert s.compose(s.matrix) == s.compose(s)                      # a 2x3 matrix: taken
+    assert Similarity.from_matrix(s.matrix.ravel().tolist()) == Similarity.from_matrix(s.matrix)
+    assert Similarity.from_matrix(np.vstack([s.matrix, [0, 0, 1]])) == Similarity.from_matrix(
+        s.matrix)
+    for call, words in ((lambda: Similarity.from_matrix(np.eye(2)), "shape (2, 2)"),
+                        (lambda: Similarity.from_matrix(np.eye(3) * 2), "shape (3, 3)"),
+                        (lambda: Similarity.from_columns([1, 2]), "shape (2,)"),
+                        (lambda: Similarity(0.0, 0.0, 1.0, 1.0).inverse(), "scale 0"),
+                        (lambda: s.apply([[1.0, 2.0, 3.0]]), "shape (1, 3)"),
+                        (lambda: s.compose("s"), "got str")):
+        with pytest.raises(seahough.ParameterError, match=re.escape(words)):
+            call()

@@ -18,6 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import ParameterError
+
 
 def rotation(angle_deg: float) -> np.ndarray:
     """The 2x2 matrix of equation 1 for ``angle_deg`` (no scale)."""
@@ -340,8 +342,15 @@ class Similarity:
 
     @classmethod
     def from_matrix(cls, matrix) -> "Similarity":
-        """The nearest similarity to a 2x3 matrix (averages out rounding asymmetry)."""
-        m = np.asarray(matrix, dtype=float)
+        """The nearest similarity to a 2x3 matrix (averages out rounding
+        asymmetry); its 6 numbers in a row (a Parquet table's ``matrix``) or a
+        3x3 one whose last row is 0, 0, 1 are taken too.
+
+        >>> s = Similarity.from_matrix([1.0, 0.0, 5.0, 0.0, 1.0, 7.0])
+        >>> s.tx, s.ty, s.scale
+        (5.0, 7.0, 1.0)
+        """
+        m = _matrix23(matrix)
         return cls(float(0.5 * (m[0, 0] + m[1, 1])), float(-0.5 * (m[1, 0] - m[0, 1])),
                    float(m[0, 2]), float(m[1, 2]))
 
@@ -351,7 +360,7 @@ class Similarity:
         (``a = m[0, 0]``, ``b = -m[1, 0]``) and whose translation is its
         last: exact for a matrix that already is a similarity, where
         :meth:`from_matrix` would average away rounding."""
-        m = np.asarray(matrix, dtype=float)
+        m = _matrix23(matrix)
         return cls(float(m[0, 0]), float(-m[1, 0]), float(m[0, 2]), float(m[1, 2]))
 
     # ------------------------------------------------------------------ reading
@@ -382,8 +391,12 @@ class Similarity:
         return self.tx + self.a * x + self.b * y, self.ty - self.b * x + self.a * y
 
     def apply(self, points) -> np.ndarray:
-        """Map an (N, 2) array of (x, y) points."""
-        p = np.asarray(points, dtype=float).reshape(-1, 2)
+        """Map an (N, 2) array of (x, y) points (one point: a pair)."""
+        p = np.asarray(points, dtype=float)
+        if p.shape[-1:] != (2,) or p.ndim > 2:
+            raise ParameterError(f"points: expected (x, y) points, an (N, 2) array, got an "
+                                 f"array of shape {p.shape}")
+        p = p.reshape(-1, 2)
         x, y = self.map(p[:, 0], p[:, 1])
         return np.stack([x, y], 1)
 
@@ -400,13 +413,21 @@ class Similarity:
         return cls(c.real, -c.imag, t.real, t.imag)
 
     def compose(self, first: "Similarity") -> "Similarity":
-        """Apply ``first``, then this one."""
+        """Apply ``first`` (a Similarity, or its 2x3 matrix), then this one."""
+        if not isinstance(first, Similarity):
+            if isinstance(first, (np.ndarray, list, tuple)):
+                first = Similarity.from_matrix(first)
+            else:
+                raise ParameterError(f"compose: expected a Similarity or a 2x3 matrix, got "
+                                     f"{type(first).__name__}")
         c2, t2 = self._complex()
         c1, t1 = first._complex()
         return self._from_complex(c2 * c1, c2 * t1 + t2)
 
     def inverse(self) -> "Similarity":
         c, t = self._complex()
+        if c == 0:
+            raise ParameterError(f"{self}: a similarity of scale 0 has no inverse")
         return self._from_complex(1 / c, -t / c)
 
     def power(self, t: float) -> "Similarity":
@@ -422,6 +443,24 @@ class Similarity:
         """The same transform in coordinates whose origin is at ``(ox, oy)``:
         ``T(-o) S T(o)`` (e.g. a motion measured on crops of a frame)."""
         return Similarity.from_columns(shift_origin(self.matrix, ox, oy))
+
+
+def _matrix23(matrix) -> np.ndarray:
+    """A 2x3 matrix from a 2x3 one, its 6 numbers in a row, or a 3x3 one
+    whose last row is 0, 0, 1; a ParameterError naming the shape otherwise."""
+    try:
+        m = np.asarray(matrix, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"matrix: expected a 2x3 matrix of numbers, got "
+                             f"{type(matrix).__name__}") from None
+    if m.shape == (6,):
+        m = m.reshape(2, 3)
+    elif m.shape == (3, 3) and np.allclose(m[2], (0.0, 0.0, 1.0)):
+        m = m[:2]
+    if m.shape != (2, 3):
+        raise ParameterError(f"matrix: expected a 2x3 matrix (or its 6 numbers), got an "
+                             f"array of shape {m.shape}")
+    return m
 
 
 def frame_centre(shape) -> np.ndarray:
