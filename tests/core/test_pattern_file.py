@@ -71,6 +71,37 @@ def test_bad_pattern_files_say_what_is_wrong(tmp_path):
         seahough.Pattern.rectangle(40, 30).save(tmp_path / "dir.npz")
 
 
+def test_a_name_without_npz_loads_what_save_wrote_and_the_command_line_reads_it(tmp_path,
+                                                                                  capsys):
+    """A Python user's trial: ``save("marker")`` wrote marker.npz, which
+    ``load("marker")`` did not find; ``save(folder)`` wrote folder.npz beside
+    it; ``seahough detect marker.npz`` took the file for an image."""
+    from seahough.cli import main
+
+    pattern = seahough.Pattern.from_image(*S.marker("board", 120))
+    assert pattern.save(tmp_path / "marker") == tmp_path / "marker.npz"
+    again = seahough.Pattern.load(tmp_path / "marker")
+    assert again.kind == pattern.kind and np.array_equal(again.image, pattern.image)
+    (tmp_path / "out").mkdir()
+    with pytest.raises(seahough.WriteError, match="out: is a folder"):
+        pattern.save(tmp_path / "out")
+    assert not (tmp_path / "out.npz").exists()
+    scene = S.marker_scene("board", seed=3, source="procedural")[0]
+    import cv2
+    cv2.imwrite(str(tmp_path / "scene.png"), scene)
+    with pytest.raises(SystemExit) as ex:
+        main(["detect", str(tmp_path / "marker.npz"), str(tmp_path / "scene.png"), "--json"])
+    assert ex.value.code == 0
+    import json
+    got = json.loads(capsys.readouterr().out)["detections"][0]
+    want = seahough.Detector(pattern).detect(scene)[0]
+    assert (got["x"], got["y"], got["score"]) == (want.x, want.y, want.score)
+    with pytest.raises(SystemExit) as ex:
+        main(["detect", str(tmp_path / "marker.npz"), str(tmp_path / "scene.png"),
+              "--polarity", "either"])
+    assert ex.value.code == 2 and "keeps its own polarity" in capsys.readouterr().err
+
+
 def test_a_dim_pattern_loads_as_it_was_saved(tmp_path):
     # a frame whose grey levels all lie within 0-1 (a very dark frame, made
     # searchable by a low min_gradient): to_gray would take such levels for a

@@ -565,6 +565,14 @@ def parse_pattern(spec: str, polarity: str | None = None, mask: str | None = Non
         if not hint and shape and shape.group(1) in _SHAPE_USAGE:
             hint = f" (a shape is NAME:SIZES: {_SHAPE_USAGE[shape.group(1)]})"
         raise _Fail(f"pattern {spec}: no such file{hint}")
+    if p.suffix.lower() == ".npz":   # (a pattern Pattern.save wrote: made once, used here)
+        if mask is not None or polarity is not None:
+            raise _Fail(f"pattern {spec}: a saved pattern keeps its own "
+                        f"{'mask' if mask is not None else 'polarity'} (give none)")
+        try:
+            return Pattern.load(spec, config=config)
+        except SeahoughError as e:
+            raise _Fail(f"pattern {spec}: {_problem(e, spec)}") from None
     try:
         return Pattern.from_image(spec, mask=mask, polarity=_IMAGE_POLARITY[polarity or "same"],
                                   config=config)

@@ -338,8 +338,8 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     """Find PATTERN in each IMAGE.
 
     \b
-    PATTERN is an image file of the object (its centre is the origin) or
-    a shape (pixels):
+    PATTERN is an image file of the object (its centre is the origin), a
+    pattern file written by Pattern.save (.npz), or a shape (pixels):
       rect:W,H           a filled rectangle (the paper's marker)
       line:LENGTH,WIDTH  a rope, cable or pipe: reports its angle and offset
       circle:R           a disc;  circle:R,INNER (or ring:R,INNER)  a ring

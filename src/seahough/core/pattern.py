@@ -567,8 +567,10 @@ class Pattern:
     FILE_VERSION = _pio.FILE_VERSION
 
     def save(self, path) -> Path:
-        """Write the pattern to ``path`` (a ``.npz`` file; numpy arrays and
-        plain values, no pickled code), to be read by :meth:`load` and
+        """Write the pattern to ``path`` (a ``.npz`` file, the suffix added
+        when the name lacks it; numpy arrays and plain values, no pickled
+        code; returns the path written), to be read by :meth:`load` (which
+        finds it by either name), ``seahough detect FILE.npz`` and
         searched again without its source image: prepare a model once, use
         it on other machines or in later runs.
 

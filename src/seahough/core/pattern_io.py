@@ -34,6 +34,8 @@ def grey_and_colour(image, name: str = "pattern", bit_depth: int | None = None):
 def save(p, path) -> Path:
     """:meth:`Pattern.save` (see there)."""
     path = Path(path)
+    if path.is_dir():   # (not "folder.npz" beside it)
+        raise WriteError(f"{path}: is a folder; give the pattern file's name (a .npz file)")
     if path.suffix != ".npz":
         path = path.with_name(path.name + ".npz")
     arrays = {"version": np.array(FILE_VERSION), "gray": p._gray,
@@ -63,6 +65,9 @@ def save(p, path) -> Path:
 def load(cls, path, config: Config | None = None):
     """:meth:`Pattern.load` (see there)."""
     path = Path(path)
+    npz = path.with_name(path.name + ".npz")
+    if not path.exists() and path.suffix != ".npz" and npz.is_file():
+        path = npz   # (save added it, as numpy's savez does)
     bad = f"{path}: not a saved seahough pattern"
     try:
         z = np.load(path, allow_pickle=False)
