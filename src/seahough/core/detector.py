@@ -60,8 +60,9 @@ class SearchResult:
     ``note`` says why a search stopped before voting (its detections are
     then empty): one of :data:`SEARCH_NOTES`. ``planes`` and ``features``
     may then be None. ``candidates`` are the refined candidate poses
-    (:class:`~.candidates.Candidate`: ``pose``, ``score``, ``nfa``), best
-    first, at most ``Config.n_candidates`` (7; ``max_results + 2`` when
+    (:class:`~.candidates.Candidate`: ``pose``, ``score``, ``nfa``), in the
+    order of their working-scale score (the coarse one: the full-resolution
+    finish, which ranks the detections, may order them otherwise), at most ``Config.n_candidates`` (7; ``max_results + 2`` when
     more results are asked for) per pattern; one not reported
     says why in its ``declined`` (e.g. "NFA 1.08 over max_nfa 1", or a
     disc's pose for a ring: "its hole is not in the image"). An object in

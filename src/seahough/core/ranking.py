@@ -78,7 +78,9 @@ class Detection(ValueEquality):
     outline : list of ndarray
         The pattern's outline polylines in image pixels.
     votes : float
-        Height of the accumulator peak (share of the voting points).
+        Height of the accumulator peak: votes per voting point of the
+        pattern, pooled over neighbouring bins (not a share: a clear peak is
+        often above 1, while ``score`` is at most 1).
     kind : str
         ``"object"``, or ``"line"`` for line patterns.
     line_angle, line_offset : float or None
