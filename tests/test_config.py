@@ -96,3 +96,16 @@ def test_ignore_is_kept_as_whole_pixel_boxes_and_recorded_only_when_set():
     assert c.ignore == ((10, 20, 30, 40),) and hash(c) == hash(Config(ignore=((10, 20, 30, 40),)))
     assert config_record(c)["ignore"] == [[10, 20, 30, 40]]
     assert "ignore" not in config_record(Config())
+
+
+def test_an_unknown_keyword_is_a_parameter_error_naming_it():
+    """A user's trial: Config(bogus=1) raised a TypeError; the constructors
+    of Config, SearchTuning and OdometryTuning now say which name is not one
+    of theirs, as Config.replace did."""
+    import inspect
+
+    for cls in (seahough.Config, seahough.SearchTuning, seahough.OdometryTuning):
+        with pytest.raises(seahough.ParameterError, match=f"{cls.__name__} has no parameter 'bogus'"):
+            cls(bogus=1)
+        assert "bogus" not in inspect.signature(cls).parameters and cls() == cls()
+    assert seahough.Config(smooth=2.0).smooth == 2.0          # (known names as before)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import math
 from dataclasses import dataclass
 
@@ -32,6 +33,25 @@ def _check_fields(obj, prefix: str, *, shares=(), counts=(), pixels=(), min_coun
         number(f"{prefix}.{name}", getattr(obj, name), lo=0.0, hi=1000.0)
 
 
+def _named(cls):
+    """A dataclass whose constructor refuses an unknown keyword with a
+    ParameterError naming it (a TypeError before: a user's trial)."""
+    init = cls.__init__
+    names = {f.name for f in dataclasses.fields(cls)}
+
+    def __init__(self, *args, **kw):
+        unknown = [k for k in kw if k not in names]
+        if unknown:
+            raise ParameterError(f"{cls.__name__} has no parameter {unknown[0]!r} (its "
+                                 f"parameters: help(seahough.{cls.__name__}))")
+        init(self, *args, **kw)
+
+    __init__.__doc__, __init__.__signature__ = init.__doc__, inspect.signature(init)
+    cls.__init__ = __init__
+    return cls
+
+
+@_named
 @dataclass(frozen=True)
 class SearchTuning:
     """Fixed choices of the candidate and ranking stages (``Config.search``).
@@ -114,6 +134,7 @@ class SearchTuning:
                                                      "icp_iterations"), min_count=1)
 
 
+@_named
 @dataclass(frozen=True)
 class Config:
     """Parameters of every stage, with defaults that suit 640x480 photos.
@@ -464,6 +485,7 @@ MOTION_CONFIG = Config(n_pattern_points=256, n_verify_points=600, target_size=32
 ODOMETRY_CONFIG = MOTION_CONFIG.replace(n_pattern_points=128, n_verify_points=400)
 
 
+@_named
 @dataclass(frozen=True)
 class OdometryTuning:
     """The keyframe, prior and fallback policy of :func:`~seahough.run_odometry`.

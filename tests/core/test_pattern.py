@@ -9,6 +9,7 @@ its vertices moved by (m, m) and its origin is the canvas centre.
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -286,3 +287,13 @@ def test_long_borders_are_judged_again_when_the_blur_changes():
     p = Pattern.from_image(crop)
     assert [p.has_long_borders(Config(smooth=s)) for s in (0.0, 4.0)] == [answers[0.0],
                                                                          answers[4.0]]
+
+
+@pytest.mark.parametrize("origin", [(1, 2, 3), (1,), "ab", 5.0])
+def test_an_origin_is_exactly_two_numbers(origin):
+    """A user's trial: origin=(1, 2, 3) was taken as (1, 2) without a word."""
+    img = np.zeros((40, 40), np.uint8)
+    img[10:30, 10:30] = 200
+    with pytest.raises(ParameterError, match=re.escape(f"origin={origin!r}: must be an (x, y)")):
+        Pattern.from_image(img, origin=origin)
+    assert Pattern.from_image(img, origin=np.array([3.0, 4.0])).origin == (3.0, 4.0)

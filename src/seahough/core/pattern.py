@@ -174,8 +174,9 @@ class Pattern:
         self.painted = _pio.painted(colour, mask)
         if origin is None:
             origin = ((w - 1) / 2.0, (h - 1) / 2.0)
-        try:
-            origin = (float(origin[0]), float(origin[1]))
+        try:   # (exactly two numbers: (1, 2, 3) was taken as (1, 2))
+            xy = tuple(float(v) for v in origin) if len(origin) == 2 else ()
+            origin = (xy[0], xy[1])
         except (TypeError, ValueError, IndexError):
             raise ParameterError(f"origin={origin!r}: must be an (x, y) pair") from None
         lim = MAX_ORIGIN_OUTSIDE * max(h, w)
