@@ -114,8 +114,11 @@ def test_a_unit_float_image_pushed_over_one_is_still_read_as_one(monkeypatch):
     many = unit * 1.25                    # (the bright rectangle: 28 % of the pixels)
     with warnings.catch_warnings(record=True) as w:
         warnings.simplefilter("always")
-        assert to_gray(many, name="a.tif").max() == pytest.approx(1.25 * 220 / 255)
-        to_gray(unit * 3)                             # (dim again: said once)
+        assert to_gray(many.astype(np.float64), name="a.tif").max() == pytest.approx(
+            1.25 * 220 / 255)
+        to_gray(unit.astype(np.float64) * 3.0)        # (dim again: said once)
+        to_gray(many)                                 # (float32: the package's own levels)
+        seahough.estimate_motion(_scene() // 100, _scene() // 100)   # (a dark 8-bit pair)
         to_gray(unit * 2 - 1)                         # -1..1
         to_gray(g * 1000)                             # far over 255
         to_gray(g)                                    # levels 0-255: nothing to say

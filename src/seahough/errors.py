@@ -65,9 +65,9 @@ class BitDepthWarning(UserWarning):
 
 class LevelsWarning(UserWarning):
     """A float image whose values are taken as levels 0-255 but look like
-    another scale: values under 0 (a -1..1 image), at most 10 (too dark to
-    show edges; a 0-1 image with too many values over 1), or over 1024.
-    Said once a process for each of the three."""
+    another scale: values under -0.5 (a -1..1 image), over 1024, or, for a
+    float64 (or float16) image, at most 10 (too dark to show edges; a 0-1
+    image with too many values over 1). Said once a process for each."""
 
 
 def without_name(exc: BaseException, name) -> str:

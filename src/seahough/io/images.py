@@ -284,7 +284,7 @@ def to_gray(image, *, name: str = "image", max_pixels: int = 200_000_000,
     their values over 1: a 0-1 image pushed a little over 1, saturated at
     255); other floats are levels 0-255 as they are (a
     :class:`~seahough.errors.LevelsWarning` when they look like another
-    scale: under 0, at most 10, over 1024). A path
+    scale: under -0.5, over 1024, a float64 image at most 10). A path
     is read by :func:`read_image` (with ``max_pixels``, ``max_memory_mb``
     and ``orientation``).
 
@@ -372,7 +372,9 @@ def _levels(image, label, max_pixels, min_side, max_memory_mb, orientation,
         lo, hi = float(a.min(initial=0)), float(a.max(initial=0))
         unit = _unit_levels(a, lo, hi)
         if not unit:
-            say_levels(lo, hi, label)
+            # (float32 is also what the package hands itself: a dark 8-bit frame
+            # converted once is no "dim float image" of the user's)
+            say_levels(lo, hi, label, dim=a.dtype != np.float32)
         if not unit and a.dtype == np.float32 and a.flags.c_contiguous and a.ndim == 2:
             # already the levels a search works on (a frame cropped and checked
             # before): no copy (a 12 MP frame's is 46 MB), a read-only view
@@ -432,14 +434,15 @@ def _unit_levels(a: np.ndarray, lo: float, hi: float) -> bool:
 _SAID_LEVELS: set = set()
 
 
-def say_levels(lo: float, hi: float, label: str) -> None:
+def say_levels(lo: float, hi: float, label: str, dim: bool = True) -> None:
     """Warn, once a process for each kind, that a float image taken as levels
     0-255 (values ``lo`` to ``hi``) looks like another scale: values under
-    0, a largest value of at most 10 (a dark frame, or a 0-1 image with too
-    many values over 1 to be read as one), or over 1024."""
-    if lo < 0.0:
+    -0.5 (a -1..1 image), over 1024, or (``dim``: not for float32, the
+    package's own levels) a largest value of at most 10 (a dark frame, or a
+    0-1 image with too many values over 1 to be read as one)."""
+    if lo < -0.5:
         kind, why = "negative", f"values down to {lo:.3g}: below 0 is black"
-    elif hi <= 10.0:
+    elif hi <= 10.0 and dim:
         kind, why = "dim", (f"values only up to {hi:.3g} of 255: too dark to show most edges "
                             f"(a 0-1 image is scaled only when at most "
                             f"{100 * OVERSHOOT_SHARE:g} % of its values are over 1, up to "
