@@ -90,7 +90,7 @@ def plot_curves(image, curves, path=None, *, title=None, max_width=None,
     # sonar crop drawn pixel for pixel was a third covered), or its lines
     # broken; "not found" in a corner (the middle is where the rope was looked for)
     corners = _free_corners(np.vstack(anchors) if anchors else np.empty((0, 2)), w, h)
-    _notes(fig, ax, items, None, corners, (w, h), box)
+    _notes(fig, ax, items, None, corners, (w, h), box, listed=True)
     if title is None:
         n = len(curves)
         title = "no curve found" if n == 0 else f"{n} curve{'s' if n > 1 else ''}"

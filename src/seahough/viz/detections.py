@@ -297,9 +297,11 @@ def _fits_beside_object(fig, text, w, h, box_w, box_h) -> bool:
 _CORNER_NOTE = 20
 
 
-def _notes(fig, ax, items, pattern, corners, wh, box_wh):
+def _notes(fig, ax, items, pattern, corners, wh, box_wh, listed: bool = False):
     """The detection list (``items``: each line's text and colour), the "not
-    found" note and the pattern inset.
+    found" note and the pattern inset. One item is left to the caller, who
+    draws it beside its object, when it fits there (``listed``: a list of
+    one all the same: a curve's numbers are not drawn beside it).
 
     In an image corner when they fit there; next to an image too narrow
     for them (the image is then drawn on the left and they go in the space
@@ -309,12 +311,13 @@ def _notes(fig, ax, items, pattern, corners, wh, box_wh):
     fw, fh = fig.get_size_inches() * fig.dpi
     dw, dh = _image_px(wh, box_wh)
     n = len(items)
+    many = n > 1 or (n == 1 and listed)
     lw, lh = _list_size(fig, items) if items else (0.0, 0.0)
     nf_size = 30
     nf_w = _text_size(fig, "not found", fontsize=nf_size, fontweight="bold")[0] + 30
-    if n == 1:
+    if n == 1 and not many:
         inside = _fits_beside_object(fig, items[0][0], *wh, *box_wh)
-    elif n > 1:
+    elif many:
         inside = lw <= 0.94 * dw and lh <= 0.6 * dh
     else:
         inside = nf_w <= 0.9 * dw
@@ -349,12 +352,12 @@ def _notes(fig, ax, items, pattern, corners, wh, box_wh):
         if pattern is not None:
             _pattern_beside(fig, pattern, x_side, y, side_w)
         return
-    if n == 1 and not inside:
+    if n == 1 and not many and not inside:
         # no room beside the image: the label wrapped, in a free corner
         items = [(_wrap_label(fig, items[0][0], 0.94 * dw - _LIST_PAD), items[0][1])]
         _label_list(ax, items, corners[0])
         corners = corners[1:]
-    elif n > 1:
+    elif many:
         if not inside:
             items = [(_wrap_label(fig, t, 0.94 * dw - _LIST_PAD), c) for t, c in items]
         _label_list(ax, items, corners[0])
