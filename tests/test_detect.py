@@ -167,6 +167,28 @@ def test_a_detections_own_copy_is_no_look_alike():
     assert max(c.score for c in copies) > found["right"].score
 
 
+def test_only_an_untwisted_copy_leaves_the_runner_up():
+    """A copy declined as the same object is no rival when it is a disc or
+    ring, or turned under 10 degrees; a pose at the same place turned
+    further stays one (the turn of a shape is an ambiguity to see), and a
+    camera frame's "same object" (a third of the frame) always does."""
+    import types
+
+    from seahough.core.ranking import _copy_of
+
+    def cand(angle):
+        pose = seahough.Similarity.from_pose(50.0, 50.0, 1.0, angle)
+        return types.SimpleNamespace(full=types.SimpleNamespace(pose=pose))
+
+    ctx = lambda p: types.SimpleNamespace(pattern=p)      # noqa: E731
+    L = seahough.Pattern.polygon([(0, 0), (60, 0), (60, 15), (15, 15), (15, 50), (0, 50)])
+    assert _copy_of(ctx(L), cand(4.0), cand(356.0))         # (8 degrees across 0)
+    assert not _copy_of(ctx(L), cand(90.0), cand(0.0))
+    assert _copy_of(ctx(seahough.Pattern.circle(16)), cand(90.0), cand(0.0))
+    frame = seahough.Pattern.from_frame(S.frame_pair(seed=0, source="procedural")[0])
+    assert not _copy_of(ctx(frame), cand(0.0), cand(0.0))
+
+
 @pytest.mark.parametrize("name", S.MARKERS)
 def test_image_pattern_markers_found_in_moderate_water(name):
     img, mask = S.marker(name, 120)

@@ -16,7 +16,7 @@ import numpy as np
 
 from . import kernels as K
 from .._values import ValueEquality
-from ..geometry import apply_matrix, pose_to_matrix
+from ..geometry import angle_difference, apply_matrix, pose_to_matrix
 from .candidates import Candidate, SearchContext, icp_subset
 from .features import Features
 from .keypoints import edge_points_near_image
@@ -416,13 +416,10 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
                           and math.isfinite(q.tx) and math.isfinite(q.ty)
                           else "its refinement diverged (no finite pose)")
             continue
-        if any(cmp.same(c.full.pose, a.full.pose, 1.0) for a in accepted):
+        twin = next((a for a in accepted if cmp.same(c.full.pose, a.full.pose, 1.0)), None)
+        if twin is not None:
             c.declined = "the same object as a better candidate"
-            if not ctx.pattern.is_frame:
-                # (a detection's own copy, e.g. a smaller disc inside a buoy, is
-                # no look-alike of it nor of another detection; a camera
-                # frame's "same object" spans a third of the frame: a tile of a
-                # tiled floor one period off is a rival there)
+            if _copy_of(ctx, c, twin):
                 other_object.append(c)
             continue
         if len(accepted) >= ctx.max_results:
@@ -458,6 +455,21 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
         dets.append(to_detection(ctx, c, conf, gray.shape))
     dets.sort(key=lambda d: -d.score)
     return dets
+
+
+def _copy_of(ctx: SearchContext, c: Candidate, twin: Candidate) -> bool:
+    """Whether ``c``, declined as the same object as the detection ``twin``,
+    is a copy of it and no rival (left out of the runner-up): a disc or a
+    ring at any turn (a smaller disc inside a buoy), another pattern turned
+    by under 10 degrees. Not a camera frame's: its "same object" spans a
+    third of the frame (a tiled floor's tile one period off is a rival), nor
+    a pose turned further (the turn of a square is the ambiguity to see)."""
+    p = ctx.pattern
+    if p.is_frame:
+        return False
+    if p.kind in ("circle", "ring"):
+        return True
+    return abs(angle_difference(c.full.pose.angle, twin.full.pose.angle)) < 10.0
 
 
 def judge(ctx: SearchContext, c: Candidate) -> None:
