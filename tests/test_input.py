@@ -130,6 +130,15 @@ def test_a_unit_float_image_pushed_over_one_is_still_read_as_one(monkeypatch):
     assert "values down to -0.686" in said[1] and "values up to 2.2e+05" in said[2]
     # a frame already in levels is still not copied
     assert np.shares_memory(to_gray(g), g)
+    # a dip under 0 as well (saturated at 0); but whole numbers over 1 are a dark 8-bit
+    # frame's levels, however few: converting twice changes nothing (a review found the
+    # package's own float copy of a dark frame read as 0-1 the second time)
+    dip = unit.copy()
+    dip[0, :3] = -0.01
+    assert to_gray(dip)[0, 0] == 0.0 and np.array_equal(to_gray(dip)[1:], to_gray(unit)[1:])
+    dark = np.zeros((60, 80), np.uint8)
+    dark[0, :3], dark[10:30, 10:40] = 2, 1
+    assert to_gray(to_gray(dark)).max() == 2.0
 
 
 def test_bit_depth_lets_twelve_bit_frames_be_measured():

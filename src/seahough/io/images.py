@@ -384,8 +384,8 @@ def _levels(image, label, max_pixels, min_side, max_memory_mb, orientation,
         a = a.astype(np.float32)  # a copy: scaled in place (no second copy)
         if unit:
             a *= 255.0
-            if hi > 1.0:      # (a 0-1 image's overshoot: saturated, as 1.0 is)
-                np.minimum(a, 255.0, out=a)
+            if hi > 1.0 or lo < 0.0:   # (a 0-1 image's overshoot: saturated, as 1 and 0 are)
+                np.clip(a, 0.0, 255.0, out=a)
     elif a.dtype == np.uint16:
         most = None if bit_depth is None else 2 ** int(bit_depth) - 1
         if most is not None and int(a.max(initial=0)) > most:
@@ -408,11 +408,10 @@ def _levels(image, label, max_pixels, min_side, max_memory_mb, orientation,
     return a
 
 
-#: A float image whose values lie in [0, 1] is scaled to 0-255; so is one
-#: whose largest value is at most :data:`OVERSHOOT` and at most
-#: :data:`OVERSHOOT_SHARE` of whose values are over 1 (a 0-1 image that colour
-#: correction or dehazing pushed a little over 1: its values over 1 saturate
-#: at 255). Any other float image is taken as levels 0-255 as it is.
+#: Float images in [0, 1] are scaled to 0-255; so are those within 1 of it (up
+#: to :data:`OVERSHOOT`) with at most :data:`OVERSHOOT_SHARE` of their values
+#: outside it, not whole numbers (colour correction's overshoot: saturated;
+#: whole numbers are a dark 8-bit frame's levels). Others are levels 0-255.
 OVERSHOOT = 2.0
 OVERSHOOT_SHARE = 0.05
 
@@ -421,13 +420,19 @@ def _unit_levels(a: np.ndarray, lo: float, hi: float) -> bool:
     """Whether float image ``a`` (its least and largest values ``lo``,
     ``hi``) holds 0-1 levels (see :data:`OVERSHOOT`).
 
-    >>> img = np.full((10, 10), 0.5, np.float32); img[0, 0] = 1.02
-    >>> _unit_levels(img, 0.0, 1.02), _unit_levels(img * 255, 0.0, 260.1)
+    >>> img = np.full((10, 10), 0.5, np.float32); img[0, 0] = 1.02; img[1, 1] = -0.01
+    >>> _unit_levels(img, -0.01, 1.02), _unit_levels(img * 255, -2.55, 260.1)
     (True, False)
+    >>> dark = np.zeros((10, 10), np.float32); dark[0, :3] = 2.0   # (8-bit levels 0-2)
+    >>> _unit_levels(dark, 0.0, 2.0)
+    False
     """
-    if lo < 0.0 or hi > OVERSHOOT:
+    if lo < 1.0 - OVERSHOOT or hi > OVERSHOOT:
         return False
-    return bool(hi <= 1.0 or np.count_nonzero(a > 1.0) <= OVERSHOOT_SHARE * a.size)
+    if lo >= 0.0 and hi <= 1.0:
+        return True
+    out = a[(a > 1.0) | (a < 0.0)]
+    return bool(out.size <= OVERSHOOT_SHARE * a.size and np.any(out != np.round(out)))
 
 
 #: The kinds of float levels :class:`~seahough.errors.LevelsWarning` was given for.
