@@ -316,11 +316,10 @@ def test_frame_order_and_timestamps(tmp_path):
         list_frames(tmp_path / "missing")
 
 
-def test_fps_times_frames_whose_names_carry_none_and_angles_are_a_turn(tmp_path):
+def test_fps_times_frames_whose_names_carry_none(tmp_path):
     """``fps``: the time column of frames without a time in their names (a
     survey engineer's trial could not fuse a Sparus run with navigation); a
-    name's own time comes first; recorded for --resume only when given. An
-    angle window beyond a turn either way is refused, naming itself."""
+    name's own time comes first; recorded for --resume only when given."""
     frames, _ = _sequence("line", n=3, source="procedural")
     folder = tmp_path / "f"
     _write_frames(frames, folder)
@@ -336,9 +335,6 @@ def test_fps_times_frames_whose_names_carry_none_and_angles_are_a_turn(tmp_path)
     for bad in (0, -1, float("nan"), "5"):
         with pytest.raises(seahough.ParameterError, match="fps"):
             run_odometry(folder, tmp_path / "b", progress=False, fps=bad)
-    for bad in ((-400, 400), (-10, 200), (-181, 0)):
-        with pytest.raises(seahough.ParameterError, match=r"angle_range=.*within -180 to 180"):
-            run_odometry(folder, tmp_path / "b", progress=False, angle_range=bad)
 
 
 def test_a_folder_says_what_it_does_not_read(tmp_path, caplog):

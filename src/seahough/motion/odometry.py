@@ -241,9 +241,6 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
         raise ParameterError("tuning must be a seahough.OdometryTuning")
     scale_range, _ = check_ranges(scale_range, (0.0, 0.0))
     angle_range = pair("angle_range", angle_range)  # kept as given: a window around 0
-    if not (-180.0 <= angle_range[0] <= angle_range[1] <= 180.0):
-        raise ParameterError(f"angle_range={tuple(angle_range)!r}: the turn between two frames, "
-                             "degrees, within -180 to 180 (low <= high; any turn: (-180, 180))")
     if fps is not None:
         fps = number("fps", fps, lo=0.0, lo_open=True)
     mpp = resolve_metres_per_pixel(metres_per_pixel, altitude, focal_px)
