@@ -107,5 +107,7 @@ def test_an_unknown_keyword_is_a_parameter_error_naming_it():
     for cls in (seahough.Config, seahough.SearchTuning, seahough.OdometryTuning):
         with pytest.raises(seahough.ParameterError, match=f"{cls.__name__} has no parameter 'bogus'"):
             cls(bogus=1)
+        with pytest.raises(TypeError):      # (what Python raised: except TypeError still works)
+            cls(bogus=1)
         assert "bogus" not in inspect.signature(cls).parameters and cls() == cls()
     assert seahough.Config(smooth=2.0).smooth == 2.0          # (known names as before)

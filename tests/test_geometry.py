@@ -90,3 +90,7 @@ def test_bad_arguments_of_similarity_are_parameter_errors():
                         (lambda: s.compose("s"), "got str")):
         with pytest.raises(seahough.ParameterError, match=re.escape(words)):
             call()
+    # (as before: no points, and OpenCV's (N, 1, 2) contours)
+    assert s.apply([]).shape == (0, 2)
+    contour = np.array([[[1.0, 2.0]], [[3.0, 4.0]]])
+    assert np.array_equal(s.apply(contour), s.apply(contour[:, 0]))

@@ -80,8 +80,9 @@ def test_sixteen_bit_data_of_fewer_bits_is_said_once(monkeypatch):
     said = [str(x.message) for x in w if issubclass(x.category, BitDepthWarning)]
     assert len(said) == 2 and len(w) == 2, [str(x.message) for x in w]
     assert said[0] == ("a.png: a 16-bit image whose values reach only 3520, read as 16-bit "
-                       "data (levels up to 13.7 of 255: too dark to show most edges); 12-bit "
-                       "samples? give their bit depth: Config(bit_depth=12), CLI --bit-depth 12")
+                       "data (levels up to 13.7 of 255: too dark to show most edges); a "
+                       "camera's 10-14-bit samples (12 bits hold these)? give its bit depth: "
+                       "Config(bit_depth=12), CLI --bit-depth 12 (a 12-bit camera: 12)")
     assert said[1].startswith("image: a 16-bit image whose values reach only 880") and \
         "Config(bit_depth=10)" in said[1]
     # 8-bit levels in a 16-bit array: no bit depth to give

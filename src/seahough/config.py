@@ -33,6 +33,11 @@ def _check_fields(obj, prefix: str, *, shares=(), counts=(), pixels=(), min_coun
         number(f"{prefix}.{name}", getattr(obj, name), lo=0.0, hi=1000.0)
 
 
+class UnknownParameter(ParameterError, TypeError):
+    """A keyword a constructor does not take: a ParameterError, and the
+    TypeError Python gives for it (``except TypeError`` keeps working)."""
+
+
 def _named(cls):
     """A dataclass whose constructor refuses an unknown keyword with a
     ParameterError naming it (a TypeError before: a user's trial)."""
@@ -42,7 +47,7 @@ def _named(cls):
     def __init__(self, *args, **kw):
         unknown = [k for k in kw if k not in names]
         if unknown:
-            raise ParameterError(f"{cls.__name__} has no parameter {unknown[0]!r} (its "
+            raise UnknownParameter(f"{cls.__name__} has no parameter {unknown[0]!r} (its "
                                  f"parameters: help(seahough.{cls.__name__}))")
         init(self, *args, **kw)
 

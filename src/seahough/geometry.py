@@ -393,7 +393,9 @@ class Similarity:
     def apply(self, points) -> np.ndarray:
         """Map an (N, 2) array of (x, y) points (one point: a pair)."""
         p = np.asarray(points, dtype=float)
-        if p.shape[-1:] != (2,) or p.ndim > 2:
+        if p.ndim == 3 and p.shape[1] == 1:   # (OpenCV's contours: (N, 1, 2))
+            p = p[:, 0]
+        if p.size and (p.shape[-1:] != (2,) or p.ndim > 2):
             raise ParameterError(f"points: expected (x, y) points, an (N, 2) array, got an "
                                  f"array of shape {p.shape}")
         p = p.reshape(-1, 2)

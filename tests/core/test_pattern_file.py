@@ -69,6 +69,9 @@ def test_bad_pattern_files_say_what_is_wrong(tmp_path):
     (tmp_path / "dir.npz").mkdir()
     with pytest.raises(seahough.SeahoughError, match="dir.npz"):
         seahough.Pattern.rectangle(40, 30).save(tmp_path / "dir.npz")
+    for folder in (".", "/", tmp_path):     # (a name without one: no ".npz" to add)
+        with pytest.raises(seahough.SeahoughError, match="is a folder"):
+            seahough.Pattern.load(folder)
 
 
 def test_a_name_without_npz_loads_what_save_wrote_and_the_command_line_reads_it(tmp_path,

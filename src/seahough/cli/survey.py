@@ -243,7 +243,8 @@ def odometry(frames, out, workers, scheduler, chunk_size, as_json, quiet, **opts
     """Dead reckoning over a long sequence, pairs measured in parallel.
 
     \b
-    FRAMES and the options are those of `seahough odometry`; the pairs of
+    FRAMES and the options are those of `seahough odometry` (not yet
+    --fps and --equalize: run those with `seahough odometry`); the pairs of
     frames are measured in chunks on the cluster, the chunks chained after
     (the one serial step). Writes the same files: odometry.csv, run.json,
     summary.json, trajectory.png, mosaic.png.

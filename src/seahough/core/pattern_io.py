@@ -65,9 +65,10 @@ def save(p, path) -> Path:
 def load(cls, path, config: Config | None = None):
     """:meth:`Pattern.load` (see there)."""
     path = Path(path)
-    npz = path.with_name(path.name + ".npz")
-    if not path.exists() and path.suffix != ".npz" and npz.is_file():
-        path = npz   # (save added it, as numpy's savez does)
+    if path.name and not path.exists() and path.suffix != ".npz":
+        npz = path.with_name(path.name + ".npz")
+        if npz.is_file():
+            path = npz   # (save added it, as numpy's savez does)
     bad = f"{path}: not a saved seahough pattern"
     try:
         z = np.load(path, allow_pickle=False)

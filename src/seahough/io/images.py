@@ -469,9 +469,8 @@ _SAID_BITS: set = set()
 
 
 def say_bits(top: int, label: str) -> None:
-    """Warn, once a process for each number of bits, that a uint16 image read
-    as 16-bit data holds values of fewer bits (``top``: its largest; none
-    for an empty or black image, or one reaching 4096 or more)."""
+    """Warn, once a process for each number of bits, that a uint16 image read as
+    16-bit data has values of fewer bits (``top``: its largest, 1-4095)."""
     if not 0 < top < 4096:
         return
     bits = top.bit_length()
@@ -479,10 +478,11 @@ def say_bits(top: int, label: str) -> None:
         return
     _SAID_BITS.add(bits)
     if bits <= 8:
-        what = "8-bit data in a 16-bit file? give it as uint8"
-    else:
-        what = (f"{bits}-bit samples? give their bit depth: Config(bit_depth={bits}), "
-                f"CLI --bit-depth {bits}")
+        what = "8-bit data in a 16-bit file? convert it to uint8 (numpy: .astype(np.uint8))"
+    else:   # (a guess from its brightest value: a dark frame needs fewer bits)
+        what = (f"a camera's 10-14-bit samples ({bits} bits hold these)? give its bit depth: "
+                f"Config(bit_depth={max(bits, 10)}), CLI --bit-depth {max(bits, 10)} (a "
+                f"12-bit camera: 12)")
     warnings.warn_explicit(
         f"{label}: a 16-bit image whose values reach only {top}, read as 16-bit data "
         f"(levels up to {top / 257.0:.3g} of 255: too dark to show most edges); {what}",
