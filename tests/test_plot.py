@@ -176,6 +176,18 @@ def _planes(n_angles=64, scales=(0.8, 0.9, 1.0, 1.1, 1.25), a0=0.0, span=360.0):
                              np.arange(30) * 10.0, np.arange(20) * 10.0)
 
 
+def test_a_detections_label_on_the_picture_has_its_nfa_and_flags():
+    """A colour trial: a wrong answer flagged ambiguous looked like a good one on the
+    overlay, whose label had only score, confidence, scale and angle."""
+    d = seahough.Detection(436.0, 144.0, 1.0, 12.0, 0.52, 0.05, np.eye(2, 3),
+                           flags=("ambiguous",), nfa=3.5e-10)
+    assert _det_label(d) == "score 0.52 · conf 0.05 · s 1.00 · 12.0° · nfa 3e-10 · ambiguous"
+    line = seahough.Detection(1.0, 2.0, 1.0, 0.0, 0.9, 0.8, np.eye(2, 3), kind="line",
+                              line_angle=10.0, line_offset=3.0, nfa=1e-20,
+                              flags=("position_along_line_undetermined",))
+    assert _det_label(line).endswith("px · nfa 1e-20"), _det_label(line)   # (a line's own flag left out)
+
+
 def test_det_label_wraps_rounded_angles():
     obj = types.SimpleNamespace(kind="object", score=0.9, confidence=0.8, scale=1.0,
                                 angle=359.98)
@@ -200,7 +212,7 @@ def test_a_horizontal_band_is_a_line_at_0_degrees_above_or_below_the_centre():
     assert d.line_angle == pytest.approx(0.0, abs=0.05) and d.line_angle < 179.0
     assert d.line_offset == pytest.approx(-35.0, abs=0.3)
     assert d.scale == pytest.approx(1.0, abs=0.02)
-    assert _det_label(d).endswith("offset -35.1 px") or _det_label(d).endswith("offset -35.0 px")
+    assert "offset -35.1 px" in _det_label(d) or "offset -35.0 px" in _det_label(d)
 
 
 def test_scale_angle_marker_sits_on_the_cell_it_refers_to():

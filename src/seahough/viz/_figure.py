@@ -29,7 +29,9 @@ from matplotlib import patheffects
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from ..core.ranking import FLAG_ALONG_LINE
 from ..errors import WriteError
+from ..geometry import format_angle, format_line
 from ..io.images import read_image, to_bgr8, to_gray, write_bytes
 
 #: Resolution of every figure (pixels per inch); sizes are given in pixels.
@@ -301,3 +303,25 @@ def _line_extent(gray: np.ndarray, d, half: float, min_gradient: float):
     if t1 - t0 < 0.1 * (ts[1] - ts[0]):
         return None
     return t0, t1
+
+
+def _det_label(d) -> str:
+    """``"score 0.87 · conf 0.64 · s 1.23 · 45.0° · nfa 3e-10 · ambiguous"``
+    (angles wrapped after rounding: 359.98 is written 0.0; the NFA and the
+    flags, but a line's ever-present one, as a table gives them:
+    a colour trial's wrong answer, flagged ambiguous, looked like a good one
+    on the picture), after the pattern's name for a search of several."""
+    name = getattr(d, "pattern", "")
+    if name:
+        return f"{name} · " + _det_label(type(d)(**{**d.__dict__, "pattern": ""}))
+    if d.kind == "line" and d.line_angle is not None:
+        angle, offset = format_line(d.line_angle, d.line_offset, 1)
+        head = (f"score {d.score:.2f} · conf {d.confidence:.2f} · "
+                f"line {angle}° · offset {offset:+.1f} px")
+    else:
+        head = (f"score {d.score:.2f} · conf {d.confidence:.2f} · s {d.scale:.2f} · "
+                f"{format_angle(d.angle, 1)}°")
+    nfa = getattr(d, "nfa", math.nan)
+    flags = [f for f in getattr(d, "flags", ()) if f != FLAG_ALONG_LINE]
+    return head + (f" · nfa {nfa:.0e}" if math.isfinite(nfa) else "") + "".join(
+        f" · {f}" for f in flags)

@@ -14,9 +14,8 @@ from matplotlib.offsetbox import AnchoredOffsetbox, TextArea, VPacker
 
 from ..config import Config
 from ..errors import ParameterError
-from ..geometry import format_angle, format_line
-from ._figure import COLOURS, DPI, _OUTLINE, _TEXT_OUTLINE, _as_display, _figure, _finish, \
-    _line_ends, _line_extent, _show, _text_size
+from ._figure import COLOURS, DPI, _OUTLINE, _TEXT_OUTLINE, _as_display, _det_label, _figure, \
+    _finish, _line_ends, _line_extent, _show, _text_size
 from ._inset import _pattern_beside, _pattern_inset
 
 _IMAGE_BOX = 900        # longer side of an image drawn by plot_detections, px
@@ -153,21 +152,6 @@ def _nearest_on(seg, x, y) -> tuple[float, float]:
     u = float(np.clip(np.dot((x, y) - a, ab) / max(np.dot(ab, ab), 1e-12), 0.0, 1.0))
     q = a + u * ab
     return float(q[0]), float(q[1])
-
-
-def _det_label(d) -> str:
-    """``"score 0.87 · conf 0.64 · s 1.23 · 45.0°"`` (angles wrapped after
-    rounding: 359.98 is written 0.0), after the pattern's name for a search
-    of several patterns."""
-    name = getattr(d, "pattern", "")
-    if name:
-        return f"{name} · " + _det_label(type(d)(**{**d.__dict__, "pattern": ""}))
-    if d.kind == "line" and d.line_angle is not None:
-        angle, offset = format_line(d.line_angle, d.line_offset, 1)
-        return (f"score {d.score:.2f} · conf {d.confidence:.2f} · "
-                f"line {angle}° · offset {offset:+.1f} px")
-    return (f"score {d.score:.2f} · conf {d.confidence:.2f} · s {d.scale:.2f} · "
-            f"{format_angle(d.angle, 1)}°")
 
 
 def _place_label(ax, text, x, y, colour, w, h):
