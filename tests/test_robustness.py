@@ -718,8 +718,10 @@ def test_bad_config_fields_raise_parameter_error_naming_the_field(kw):
 def test_unknown_config_field_is_a_parameter_error():
     with pytest.raises(ParameterError, match="no parameter 'n_points'"):
         Config().replace(n_points=3)
-    with pytest.raises(TypeError):      # the dataclass itself: a programming error
+    with pytest.raises(TypeError):      # the constructor: a TypeError, as Python's own ...
         Config(n_points=3)
+    with pytest.raises(ParameterError, match="Config has no parameter 'n_points'"):
+        Config(n_points=3)                  # ... and a ParameterError naming it
 
 
 @pytest.mark.parametrize("kw", [
