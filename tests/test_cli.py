@@ -1133,3 +1133,18 @@ def test_odometry_notes_a_scene_whose_scale_changes_much(tmp_path):
         else:
             assert 0.97 < seen["min"] <= seen["max"] < 1.03, seen
             assert "scale changed" not in proc.stdout, proc.stdout
+
+
+def test_quiet_detect_leaves_out_the_folder_notes(tmp_path):
+    """-q prints the results only (a trial saw "note: FOLDER: not read: 1 video
+    file" with -q); without it the note is said."""
+    folder = tmp_path / "dive"
+    folder.mkdir()
+    img = np.full((120, 160), 40, np.uint8)
+    img[40:80, 50:110] = 200
+    cv2.imwrite(str(folder / "a.png"), img)
+    (folder / "clip.mp4").write_bytes(b"")
+    quiet = run("detect", "rect:60,40", folder, "-q")
+    assert quiet.returncode == 0 and quiet.stderr == "", quiet.stderr
+    loud = run("detect", "rect:60,40", folder)
+    assert "not read: 1 video file (.mp4)" in loud.stderr, loud.stderr

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import inspect
+import logging
 import os
 import time
 from collections import deque
@@ -421,7 +422,14 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     if isinstance(detector, CurveSearch) and out is not None and "overlay" not in pictures:
         raise click.UsageError("--pictures: curves have the overlay only")
     pat = None if detector.parts else detector.pattern   # (the inset: one pattern only)
-    images, unlisted = _expand_inputs(images)
+    notes = logging.getLogger("seahough.io")
+    level = notes.level
+    if quiet:   # ("note: FOLDER: not read: ...": a note; -q prints results only)
+        notes.setLevel(logging.ERROR)
+    try:
+        images, unlisted = _expand_inputs(images)
+    finally:
+        notes.setLevel(level)
     out_dir = _out_dir(out) if out is not None else None
     workers = min(workers or default_workers(), len(images))
     bar = _progress(None, len(images), "detect", len(images) > 1 and not quiet)
