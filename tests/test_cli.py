@@ -1148,3 +1148,41 @@ def test_quiet_detect_leaves_out_the_folder_notes(tmp_path):
     assert quiet.returncode == 0 and quiet.stderr == "", quiet.stderr
     loud = run("detect", "rect:60,40", folder)
     assert "not read: 1 video file (.mp4)" in loud.stderr, loud.stderr
+
+
+def test_colour_choices_are_said_and_colour_searches_either_polarity(tmp_path, capsys):
+    """A colour trial: an orange cross on a grey canvas (15 % of it coloured, a
+    painted marker is 20 %) was searched by its grey edges without a word, its
+    answers on a yellow L; --colour alone kept the image's polarity (0 of 12
+    found, 12 with --polarity either); --polarity was ignored for a painted
+    pattern without a word."""
+    from seahough.cli import main
+    from seahough.cli._common import make_detector
+
+    canvas = np.full((160, 160, 3), 128, np.uint8)
+    canvas[65:95, 40:120] = (0, 120, 255)          # an orange cross: 15 % of the canvas
+    canvas[40:120, 65:95] = (0, 120, 255)
+    cross = tmp_path / "cross.png"
+    cv2.imwrite(str(cross), canvas)
+    scene = tmp_path / "scene.png"
+    cv2.imwrite(str(scene), np.full((240, 320, 3), 90, np.uint8))
+    notes = lambda err: [ln for ln in err.splitlines() if ln.startswith("note:")]  # noqa: E731
+    for extra, said in (([], 1), (["-q"], 0), (["--colour"], 0), (["--grey"], 0)):
+        with pytest.raises(SystemExit):
+            main(["detect", str(cross), str(scene), *extra])
+        got = notes(capsys.readouterr().err)
+        assert len(got) == said, (extra, got)
+        if said:
+            assert "searched by its grey edges: 15% of it is coloured" in got[0], got
+    assert make_detector(str(cross), (0.5, 2), (0, 360), 5, 0.5, 0.0, None, None, False,
+                         None, None, colour=True).pattern.polarity == "either"
+    assert make_detector(str(cross), (0.5, 2), (0, 360), 5, 0.5, 0.0, None, None, False,
+                         "same", None, colour=True).pattern.polarity == "bright"
+    painted = tmp_path / "board.png"
+    board = np.full((80, 120, 3), (0, 120, 255), np.uint8)
+    board[20:60, 30:90] = 255
+    cv2.imwrite(str(painted), board)
+    with pytest.raises(SystemExit):
+        main(["detect", str(painted), str(scene), "--polarity", "dark"])
+    got = notes(capsys.readouterr().err)
+    assert len(got) == 1 and "--polarity dark applies with --grey" in got[0], got

@@ -290,6 +290,11 @@ def make_detector(pattern, scale_range, angle_range, max_results, min_score, min
         cfg_kw["equalize"] = True
     if colour is not None:
         cfg_kw["colour"] = bool(colour)
+    if colour and polarity is None:
+        # (as a painted pattern is searched by default: a colour edge's sign is the
+        # channel's that changes most across it, which depends on the ground; a
+        # colour trial's orange cross, --colour alone: 0 of 12 found, 12 with either)
+        polarity = "either"
     if bit_depth is not None:
         cfg_kw["bit_depth"] = int(bit_depth)
     if smooth:

@@ -124,6 +124,33 @@ def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir,
     return res, img.shape[:2], ms, written, failed
 
 
+def _paint_notes(detector, colour, polarity=None) -> list:
+    """A note for each colour image pattern with some paint, too little to
+    be searched by its colour edges by default (a colour trial: an orange
+    cross on a grey canvas, 14 % of it, was searched in grey and its
+    answers sat on a yellow L, with nothing said). ``colour``: the user's
+    --colour/--grey (None: not given, the pattern decides)."""
+    from ..core.pattern_io import PAINTED_SHARE, paint_share
+
+    out = []
+    for name, d in (detector.parts.items() if detector.parts else [("", detector)]):
+        p = getattr(d, "pattern", None)
+        if p is not None and p.painted and colour is None and polarity not in (None, "either"):
+            out.append(f"note: {name or 'the pattern'}: painted, searched by its colour edges "
+                       f"at either polarity (--polarity {polarity} applies with --grey, or "
+                       "with --colour)")
+        if p is None or colour is not None or p.painted:
+            continue
+        share = paint_share(p._colour, p.mask)
+        if share >= 0.25 * PAINTED_SHARE:
+            out.append(f"note: {name or 'the pattern'}: searched by its grey edges: "
+                       f"{int(100 * share)}% "
+                       f"of it is coloured, under the {PAINTED_SHARE:.0%} of a painted marker "
+                       "(--colour --polarity either: by its colour edges; a tighter crop or "
+                       "--mask: the marker alone)")
+    return out
+
+
 #: The pictures ``detect --out`` can draw for an image.
 PICTURES = ("overlay", "accumulator", "edges")
 
@@ -302,7 +329,8 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, draw=None, b
               help="Edges from every colour channel of a colour image (an object that differs "
                    "from its ground by hue more than by brightness), or from its grey levels "
                    "(default: colour when the pattern image is painted in colour, an orange or "
-                   "a green marker; grey otherwise).")
+                   "a green marker; grey otherwise). In colour a pattern is searched at either "
+                   "polarity unless --polarity says otherwise.")
 @click.option("--polarity", type=click.Choice(["same", "inverted", "either", "bright", "dark"]),
               default=None, help="Contrast of the object: as in the pattern image (same; for "
               "shapes: bright on dark; bright is the same), inverted (dark on bright; dark is "
@@ -422,6 +450,9 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     if isinstance(detector, CurveSearch) and out is not None and "overlay" not in pictures:
         raise click.UsageError("--pictures: curves have the overlay only")
     pat = None if detector.parts else detector.pattern   # (the inset: one pattern only)
+    if not quiet:
+        for line in _paint_notes(detector, colour, polarity):
+            click.echo(line, err=True)
     notes = logging.getLogger("seahough.io")
     level = notes.level
     if quiet:   # ("note: FOLDER: not read: ...": a note; -q prints results only)

@@ -142,9 +142,20 @@ def painted(colour, mask) -> bool:
     >>> painted(bgr, None), painted(bgr[:, :12], None), painted(None, None)
     (True, False, False)
     """
+    return paint_share(colour, mask) >= PAINTED_SHARE
+
+
+def paint_share(colour, mask) -> float:
+    """The share of a pattern's BGR levels (of those in ``mask``) with a
+    chroma of at least :data:`PAINTED_CHROMA` (0 for a grey pattern).
+
+    >>> bgr = np.full((40, 40, 3), 30, np.float32); bgr[:10] = (0, 120, 255)
+    >>> paint_share(bgr, None), paint_share(None, None)
+    (0.25, 0.0)
+    """
     if colour is None:
-        return False
+        return 0.0
     chroma = colour.max(axis=2) - colour.min(axis=2)
     if mask is not None:
         chroma = chroma[mask]
-    return bool((chroma >= PAINTED_CHROMA).mean() >= PAINTED_SHARE)
+    return float((chroma >= PAINTED_CHROMA).mean()) if chroma.size else 0.0
