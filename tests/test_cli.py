@@ -1186,3 +1186,27 @@ def test_colour_choices_are_said_and_colour_searches_either_polarity(tmp_path, c
         main(["detect", str(painted), str(scene), "--polarity", "dark"])
     got = notes(capsys.readouterr().err)
     assert len(got) == 1 and "--polarity dark applies with --grey" in got[0], got
+
+
+def test_the_edges_picture_says_when_the_edges_came_from_colour(tmp_path, monkeypatch, capsys):
+    """A colour trial read the edges picture's grey working image as what was
+    searched: its title says when the edges came from the colour channels."""
+    from seahough import viz
+    from seahough.cli import main
+
+    titles = []
+    monkeypatch.setattr(viz, "plot_edges", lambda img, feats, path, title: titles.append(title))
+    board = np.full((80, 120, 3), (0, 120, 255), np.uint8)      # a painted board
+    board[20:60, 30:90] = 255
+    cv2.imwrite(str(tmp_path / "board.png"), board)
+    scene = np.full((240, 320, 3), (90, 110, 60), np.uint8)
+    scene[80:160, 100:220] = board
+    cv2.imwrite(str(tmp_path / "scene.png"), scene)
+    cv2.imwrite(str(tmp_path / "grey.png"), cv2.cvtColor(scene, cv2.COLOR_BGR2GRAY))
+    for img in ("scene.png", "grey.png"):
+        with pytest.raises(SystemExit):
+            main(["detect", str(tmp_path / "board.png"), str(tmp_path / img), "-q",
+                  "-o", str(tmp_path / "o"), "--pictures", "edges"])
+    capsys.readouterr()
+    assert titles[0].endswith("(edges from the colour channels; left, its grey levels)")
+    assert titles[1] == "grey.png: what the detector sees"

@@ -15,7 +15,7 @@ from typing import NamedTuple
 import click
 
 from ..config import Config
-from ..core.detector import Detector
+from ..core.detector import FLAG_GREY, Detector
 from ..errors import SeahoughError
 from ..io.frames import (IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, FrameReader, list_frames, printable,
                          split_video_ref)
@@ -207,11 +207,17 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, draw: Dr
         written["overlay"] = str(ov)
     feats = res.features
     acc_title = f"{Path(name).name}: accumulator"
+    searcher = detector
     if detector.parts:   # the edges: the best detection's pattern's (else the first's)
         which = dets[0].pattern if dets else next(iter(detector.parts))
+        searcher = detector.parts[which]
         part = res.parts.get(which) if res.parts else None
         if part is not None:
             feats = part.features
+    # (a colour search's edges come from the channels, its working image is grey:
+    # a colour trial read the left panel as what was searched)
+    in_colour = (img.ndim == 3 and bool(searcher.config.colour)
+                 and not any(FLAG_GREY in d.flags for d in dets))
     if "accumulator" in kinds:
         ac = Path(f"{base}_accumulator.png")
         if detector.parts and res.parts:
@@ -227,7 +233,8 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, draw: Dr
         written["accumulator"] = str(ac)
     if "edges" in kinds:
         ed = Path(f"{base}_edges.png")
-        plot.plot_edges(img, feats, ed, title=f"{Path(name).name}: what the detector sees")
+        how = " (edges from the colour channels; left, its grey levels)" if in_colour else ""
+        plot.plot_edges(img, feats, ed, title=f"{Path(name).name}: what the detector sees{how}")
         written["edges"] = str(ed)
 
 
