@@ -490,6 +490,9 @@ def test_cli_odometry_wiring(tmp_path, capsys, monkeypatch):
     assert "flagged: frame 2 c.png: unreadable" in out
     code, out, err = _cli(capsys, "odometry", frames, "--out", tmp_path / "r", "--altitude", "2")
     assert code == 2 and "--altitude and --focal-px go together" in err
+    # --equalize, as seahough odometry takes it (a review: the help promised its options)
+    _cli(capsys, "odometry", frames, "--out", tmp_path / "run", "--equalize", "--quiet")
+    assert calls[-1][2]["config"].equalize is True
 
 
 @pytest.mark.parametrize("blocked", ["pyarrow", "distributed"])
