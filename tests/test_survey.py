@@ -485,7 +485,8 @@ def test_cli_odometry_wiring(tmp_path, capsys, monkeypatch):
     assert f == [str(frames)] and o == str(tmp_path / "run")
     assert kw == {"workers": 3, "scheduler": None, "chunk_size": 50, "metres_per_pixel": None,
                   "altitude": 2.0, "focal_px": 800.0, "scale_range": (0.9, 1.1),
-                  "angle_range": (-20.0, 20.0), "mosaic": False, "progress": False}
+                  "angle_range": (-20.0, 20.0), "mosaic": False, "progress": False,
+                  "fps": None}
     assert "frames: 3   flagged frames: 1   distance: 1.50 m" in out
     assert "flagged: frame 2 c.png: unreadable" in out
     code, out, err = _cli(capsys, "odometry", frames, "--out", tmp_path / "r", "--altitude", "2")

@@ -408,3 +408,17 @@ def test_real_sequence_chained_as_a_single_run(tmp_path, scheduler):
     # (4.6 px of 264 at the time of writing: the wreck is in relief, and the
     # chunks' own keyframes see it from other places than the single run's)
     assert end_gap < 0.03 * length
+
+
+def test_fps_times_the_frames_by_their_place_in_the_whole_survey(tmp_path):
+    """``fps``, as run_odometry takes it: each chunk numbers its frames from
+    0, the chained rows are timed by their place in the survey."""
+    frames, _ = S.sequence(n_frames=14, seed=2, source="procedural")
+    paths = survey_odometry(frames, tmp_path / "o", workers=1, chunk_size=6, mosaic=False,
+                            progress=False, fps=2.0)
+    rows = read_odometry_csv(paths["csv"])
+    assert [r["time"] for r in rows] == [i / 2.0 for i in range(14)]
+    assert json.loads((tmp_path / "o" / "run.json").read_text())["settings"]["fps"] == 2.0
+    paths = survey_odometry(frames, tmp_path / "n", workers=1, chunk_size=6, mosaic=False,
+                            progress=False)
+    assert [r["time"] for r in read_odometry_csv(paths["csv"])] == [None] * 14

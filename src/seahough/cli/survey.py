@@ -30,7 +30,7 @@ SEARCH_OPTIONS = ("scale_range", "angle_range", "max_results", "min_score", "min
                   "polarity", "mask")
 #: The options of ``seahough odometry`` that ``survey odometry`` takes too.
 ODOMETRY_OPTIONS = ("metres_per_pixel", "altitude", "focal_px", "scale_range", "angle_range",
-                    "no_mosaic", "equalize", "bit_depth")
+                    "no_mosaic", "equalize", "fps", "bit_depth")
 #: Error rows listed after a survey (the rest: in images.parquet).
 SHOW_ERRORS = 10
 
@@ -243,8 +243,7 @@ def odometry(frames, out, workers, scheduler, chunk_size, as_json, quiet, **opts
     """Dead reckoning over a long sequence, pairs measured in parallel.
 
     \b
-    FRAMES and the options are those of `seahough odometry` (not yet
-    --fps: run that with `seahough odometry`); the pairs of
+    FRAMES and the options are those of `seahough odometry`; the pairs of
     frames are measured in chunks on the cluster, the chunks chained after
     (the one serial step). Writes the same files: odometry.csv, run.json,
     summary.json, trajectory.png, mosaic.png.
@@ -265,7 +264,7 @@ def odometry(frames, out, workers, scheduler, chunk_size, as_json, quiet, **opts
                 metres_per_pixel=mpp, altitude=altitude, focal_px=focal_px,
                 scale_range=opts["scale_range"], angle_range=opts["angle_range"],
                 mosaic=not opts["no_mosaic"], progress=not quiet and _stderr_is_terminal(),
-                **_config(opts["bit_depth"], opts["equalize"]))
+                fps=opts["fps"], **_config(opts["bit_depth"], opts["equalize"]))
     unit = "m" if (mpp is not None or altitude is not None) else "px"
     return report(_odometry_result(paths), time.perf_counter() - t0, unit, as_json)
 

@@ -97,6 +97,7 @@ def read_chunk(folder, result: dict, reader, shape) -> list:
         g = local + start
         r["index"] = g
         r["file"] = reader.name(g)
+        r["time"] = reader.time(g)   # (a chunk's own reader numbers its frames from 0)
         r["_resumed"] = local < result.get("resumed_rows", 0)
         if r["ref"] is not None:
             r["ref"] += start

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import pair
+from .._validate import number, pair
 from ..config import ODOMETRY_CONFIG, Config, OdometryTuning
 from ..core.accumulator import check_ranges
 from ..errors import ParameterError, SeahoughError, WriteError
@@ -133,7 +133,7 @@ def _measure_chunks(client, plan, items, out: Path, options: dict, progress: boo
 def odometry(frames, out, *, workers=None, scheduler=None, chunk_size=200,
              metres_per_pixel=None, altitude=None, focal_px=None, scale_range=(0.9, 1.1),
              angle_range=(-20.0, 20.0), config=None, tuning=None, mosaic=True,
-             progress=True) -> dict:
+             progress=True, fps=None) -> dict:
     """Dead reckoning over a sequence, measured in parallel chunks on Dask.
 
     Parameters
@@ -162,6 +162,9 @@ def odometry(frames, out, *, workers=None, scheduler=None, chunk_size=200,
     progress : bool
         A progress bar on stderr while the chunks are measured (only on a
         terminal).
+    fps : float, optional
+        As :func:`~seahough.run_odometry` takes it: the time of frames whose
+        names carry none, ``index / fps``.
 
     Returns
     -------
@@ -223,8 +226,12 @@ def odometry(frames, out, *, workers=None, scheduler=None, chunk_size=200,
     angle_range = pair("angle_range", angle_range)
     mpp = resolve_metres_per_pixel(metres_per_pixel, altitude, focal_px)
     chunk_size = _check_chunk_size(chunk_size)
+    if fps is not None:
+        fps = number("fps", fps, lo=0.0, lo_open=True)
     items = list_frames(frames)
     settings = run_settings(scale_range, angle_range, mpp, cfg, tuning)
+    if fps is not None:       # (as run_odometry records it: only when given)
+        settings["fps"] = float(fps)
     digest = settings_hash(settings)
     columns = CSV_BASE + (CSV_METRIC if mpp else []) + CSV_MORE + CSV_CHECK
     plan = plan_chunks(len(items), chunk_size)
@@ -248,7 +255,8 @@ def odometry(frames, out, *, workers=None, scheduler=None, chunk_size=200,
             reader.close()
         with open_client(workers, scheduler) as client:
             results = _measure_chunks(client, plan, items, out_abs, options, progress, shape)
-        reader = FrameReader(items, cfg.max_pixels, cfg.max_memory_mb)
+        # (the chunks' rows get their times here, by their frames' global numbers)
+        reader = FrameReader(items, cfg.max_pixels, cfg.max_memory_mb, fps=fps)
         try:
             return _chain_and_write(run, reader, items, results, columns, digest, mpp,
                                     scale_range, angle_range, cfg, tuning, mosaic, t_start,
