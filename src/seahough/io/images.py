@@ -279,10 +279,9 @@ def to_gray(image, *, name: str = "image", max_pixels: int = 200_000_000,
     Accepts grey (HxW or HxWx1), BGR or BGRA arrays of dtype uint8, uint16,
     other integers, bool or float. uint16 is divided by 257 (``bit_depth``:
     by ``(2**bit_depth - 1) / 255``, a camera's fewer bits in 16-bit files,
-    then clipped to 255); floats in [0, 1] are multiplied by 255 (so are
-    floats up to :data:`OVERSHOOT` with at most :data:`OVERSHOOT_SHARE` of
-    their values over 1: a 0-1 image pushed a little over 1, saturated at
-    255); other floats are levels 0-255 as they are (a
+    then clipped to 255); floats in [0, 1] are multiplied by 255 (so are a
+    0-1 image's few values pushed a little over 1 or under 0, saturated:
+    :data:`OVERSHOOT`); other floats are levels 0-255 as they are (a
     :class:`~seahough.errors.LevelsWarning` when they look like another
     scale: under -0.5, over 1024, a float64 image at most 10). A path
     is read by :func:`read_image` (with ``max_pixels``, ``max_memory_mb``
