@@ -297,3 +297,26 @@ def test_an_origin_is_exactly_two_numbers(origin):
     with pytest.raises(ParameterError, match=re.escape(f"origin={origin!r}: must be an (x, y)")):
         Pattern.from_image(img, origin=origin)
     assert Pattern.from_image(img, origin=np.array([3.0, 4.0])).origin == (3.0, 4.0)
+
+
+def test_a_long_lived_detector_keeps_bounded_memory_over_new_image_sizes():
+    """A user's trial (a docking tracker searching a region of interest
+    whose size changes every frame): each new size is a new working scale,
+    and the pattern's features and the Detector's edge gap per scale were
+    kept without bound (about 13 kB a frame, never freed). They are now a
+    bounded memo: the least recently used go, and come back computed alike."""
+    import cv2
+
+    from seahough import Detector
+    from seahough._memo import MAX_ENTRIES
+
+    img = np.full((420, 560), 40, np.uint8)
+    cv2.rectangle(img, (200, 150), (290, 210), 220, -1)
+    det = Detector(Pattern.rectangle(60, 40), (0.8, 2.0))
+    first = det.detect(img[100:300, 150:360])
+    for k in range(80):
+        det.detect(img[100:300 + k, 150:360 + k])
+    assert 0 < len(det.pattern._cache) <= MAX_ENTRIES and 0 < len(det._gaps) <= MAX_ENTRIES
+    # (the first size's values were dropped long ago: computed again, the same answer)
+    again = det.detect(img[100:300, 150:360])
+    assert again == first and len(first) == 1

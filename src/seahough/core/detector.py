@@ -17,6 +17,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from ..config import Config
+from .._memo import Memo
 from .._validate import check_max_nfa, number
 from ..errors import ParameterError, PatternError
 from ..io.images import read_image, to_image
@@ -190,14 +191,14 @@ class Detector:
                                      "with x1 > x0 and y1 > y0")
             search_region = sr
         self.search_region = search_region
-        self._gaps: dict = {}   # working scale -> the pattern's edge gap (see _edge_gap)
+        self._gaps = Memo()   # working scale -> the pattern's edge gap (see _edge_gap)
         if auto and self.config.colour:
             self._grey = copy.copy(self)
             self._grey.config = self.config.replace(colour=False)
-            self._grey._gaps = {}
+            self._grey._gaps = Memo()
             if pattern.polarity != "either":
                 self.pattern = copy.copy(pattern)
-                self.pattern.polarity, self.pattern._cache = "either", {}
+                self.pattern.polarity, self.pattern._cache = "either", Memo()
         if self.parts:   # one Config for all: they share the image's features
             ref = self.config if config is not None else next(iter(self.parts.values())).config
             # (but for colour: each pattern is searched in the image it needs)
@@ -351,12 +352,13 @@ class Detector:
         shape, a marker: judged at the default chain length, also when the
         search's is 0), else None (a texture, a line). Kept per scale: the
         pattern does not change between searches."""
-        if factor not in self._gaps:
-            p, cfg = self.pattern, self.config
+        p, cfg = self.pattern, self.config
+
+        def gap():
             drawn = not p.is_line and p.has_long_borders(
                 cfg if cfg.chain_length > 0 else cfg.replace(chain_length=Config().chain_length))
-            self._gaps[factor] = edge_gap(pf, p.either) if drawn else None
-        return self._gaps[factor]
+            return edge_gap(pf, p.either) if drawn else None
+        return self._gaps.get_or_compute(factor, gap)
 
     def _features_config(self) -> Config:
         """The Config of the image's features: key points weighted by their

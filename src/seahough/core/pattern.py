@@ -19,6 +19,7 @@ from . import kernels as K
 from ..config import Config
 from .._validate import number
 from ..errors import ParameterError, PatternError
+from .._memo import Memo
 from .features import extract_features
 from ..io.images import to_gray
 from . import pattern_io as _pio
@@ -202,7 +203,7 @@ class Pattern:
         self.closed = closed
         self._edge_mask = edge_mask if edge_mask is not None else (
             None if mask is None else cv2.dilate(mask.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0)
-        self._cache: dict = {}
+        self._cache = Memo()   # (bounded: one per working scale, which image sizes set)
         # fails now, not at the first search, if it has no edges. A frame is
         # searched at its working scale (only finishing points are needed at
         # full resolution, see finish_points): check it there, at the scale a
@@ -346,12 +347,9 @@ class Pattern:
 
     def features(self, factor: float, config: Config | None = None) -> PatternFeatures:
         """The pattern's voting and scoring points at a working scale (cached)."""
-        config = config or Config()
-        key = self._features_key(factor, config)
-        if key not in self._cache:
-            # (two threads may both compute it: the same features, the first kept)
-            self._cache.setdefault(key, self._compute_features(factor, config))
-        return self._cache[key]
+        config = config or Config()   # (two threads may both compute them: the first kept)
+        return self._cache.get_or_compute(self._features_key(factor, config),
+                                          lambda: self._compute_features(factor, config))
 
     def _features_key(self, factor: float, config: Config) -> tuple:
         """What :meth:`_compute_features` depends on."""
@@ -421,16 +419,18 @@ class Pattern:
             return not self.is_frame
         key = ("long borders", config.chain_length, config.min_gradient, self.in_colour(config),
                config.photo_blur, config.equalize)
-        if key not in self._cache:
-            img = np.ascontiguousarray(self._edges_from(config), np.float32)
-            if config.photo_blur > 0:   # (as its features see it: a crisp staircase is not)
-                img = cv2.GaussianBlur(img, (0, 0), config.photo_blur,
-                                       borderType=cv2.BORDER_REPLICATE)
-            f = extract_features(img, 1.0, config.replace(chain_length=0.0),
-                                 mask=self._edge_mask)
-            share = chain_share(f.edges, max(config.chain_length, 1.0), f.index)
-            self._cache.setdefault(key, share >= LONG_BORDERS)
-        return self._cache[key]
+        return self._cache.get_or_compute(key, lambda: self._long_borders(config))
+
+    def _long_borders(self, config: Config) -> bool:
+        """:meth:`has_long_borders` of a photo pattern, computed."""
+        img = np.ascontiguousarray(self._edges_from(config), np.float32)
+        if config.photo_blur > 0:   # (as its features see it: a crisp staircase is not)
+            img = cv2.GaussianBlur(img, (0, 0), config.photo_blur,
+                                   borderType=cv2.BORDER_REPLICATE)
+        f = extract_features(img, 1.0, config.replace(chain_length=0.0),
+                             mask=self._edge_mask)
+        share = chain_share(f.edges, max(config.chain_length, 1.0), f.index)
+        return share >= LONG_BORDERS
 
     def near_turns(self, config: Config | None = None) -> tuple:
         """The quarter and half turns that map most, not all, of the pattern's
@@ -441,17 +441,19 @@ class Pattern:
             return ()
         config = config or Config()
         key = ("near turns",) + self._features_key(1.0, config) + (config.angle_tolerance,)
-        if key not in self._cache:
-            from .symmetry import near_turns
-            f = self.features(1.0, config)
-            # (the sampled points against all the edges they were taken from)
-            e = find_edge_points(compute_gradients(np.asarray(self._prepared(config), np.float32),
-                                                   1.0, config.equalize), config.min_gradient)
-            if self._edge_mask is not None and len(e):
-                e = e.take(self._edge_mask[e.iy, e.ix])
-            self._cache[key] = near_turns(f.vx, f.vy, f.vangle, e, e.index_map(), self.origin,
-                                          tol=math.radians(config.angle_tolerance))
-        return self._cache[key]
+        return self._cache.get_or_compute(key, lambda: self._near_turns(config))
+
+    def _near_turns(self, config: Config) -> tuple:
+        """:meth:`near_turns`, computed."""
+        from .symmetry import near_turns
+        f = self.features(1.0, config)
+        # (the sampled points against all the edges they were taken from)
+        e = find_edge_points(compute_gradients(np.asarray(self._prepared(config), np.float32),
+                                               1.0, config.equalize), config.min_gradient)
+        if self._edge_mask is not None and len(e):
+            e = e.take(self._edge_mask[e.iy, e.ix])
+        return near_turns(f.vx, f.vy, f.vangle, e, e.index_map(), self.origin,
+                          tol=math.radians(config.angle_tolerance))
 
     def finish_points(self, factor: float, config: Config | None = None):
         """``(vx, vy, vangle)``: the points that refine a pose found at working
@@ -476,16 +478,18 @@ class Pattern:
             f = self.features(1.0, config)
             return f.vx, f.vy, f.vangle
         key = ("finish",) + self._features_key(factor, config) + (config.angle_tolerance,)
-        if key not in self._cache:
-            pts = self._snap_to_full(factor, config)
-            if pts[0].size < max(8, 0.5 * self.features(factor, config).vx.size):
-                try:
-                    f = self.features(1.0, config)
-                    pts = (f.vx, f.vy, f.vangle)
-                except PatternError:
-                    pass
-            self._cache[key] = pts
-        return self._cache[key]
+        return self._cache.get_or_compute(key, lambda: self._finish_points(factor, config))
+
+    def _finish_points(self, factor: float, config: Config):
+        """:meth:`finish_points` of a frame below full resolution, computed."""
+        pts = self._snap_to_full(factor, config)
+        if pts[0].size < max(8, 0.5 * self.features(factor, config).vx.size):
+            try:
+                f = self.features(1.0, config)
+                pts = (f.vx, f.vy, f.vangle)
+            except PatternError:
+                pass
+        return pts
 
     def _snap_to_full(self, factor: float, config: Config):
         f = self.features(factor, config)
@@ -510,8 +514,7 @@ class Pattern:
         (:meth:`_edges_from`), inverted for ``dark`` polarity, blurred for a
         photo crop."""
         gray = self._edges_from(config)
-        if self.polarity == "dark":
-            gray = 255.0 - gray
+        gray = 255.0 - gray if self.polarity == "dark" else gray
         if self.is_photo and config.photo_blur > 0:
             # a crop of a clear photo, searched through water: its finest
             # texture would not be there to match (Config.pattern_blur)
@@ -521,15 +524,13 @@ class Pattern:
 
     def _compute_features(self, factor: float, config: Config) -> PatternFeatures:
         gray = self._prepared(config)
-        em = self._edge_mask
-        mask_w = None
-        if em is not None:
-            if factor < 0.999:
-                h, w = gray.shape[:2]
-                nw, nh = max(int(round(w * factor)), 1), max(int(round(h * factor)), 1)
-                mask_w = cv2.resize(em.astype(np.uint8), (nw, nh), interpolation=cv2.INTER_NEAREST) > 0
-            else:
-                mask_w = em
+        em, mask_w = self._edge_mask, None
+        if em is not None and factor < 0.999:
+            h, w = gray.shape[:2]
+            nw, nh = max(int(round(w * factor)), 1), max(int(round(h * factor)), 1)
+            mask_w = cv2.resize(em.astype(np.uint8), (nw, nh), interpolation=cv2.INTER_NEAREST) > 0
+        elif em is not None:
+            mask_w = em
         # the pattern's own edges: the most contrasted, eight times more than
         # it keeps (a small pattern keeps all of them). Fewer (4x-6x) measured
         # as accurate on synthetic pairs and fragments and a little faster,

@@ -497,9 +497,8 @@ def _unseen_hole(ctx: SearchContext, c: Candidate) -> bool:
     if share <= 0.0 or p.is_frame or p.is_line or len(p.outline) < 2:
         return False
     key = ("holes",) + p._features_key(ctx.factor, cfg)   # (once per pattern and scale)
-    if key not in p._cache:
-        p._cache[key] = hole_labels(p.outline, p.origin, pf.vx, pf.vy, ctx.factor)
-    labels = p._cache[key]
+    labels = p._cache.get_or_compute(
+        key, lambda: hole_labels(p.outline, p.origin, pf.vx, pf.vy, ctx.factor))
     if labels is None:
         return False
     ids, _ = match(c.fit.pose, pf.vx, pf.vy, pf.vangle, ctx.features.edges, ctx.features.index,
