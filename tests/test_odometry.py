@@ -581,12 +581,12 @@ def test_a_long_run_keeps_no_state_per_frame(tmp_path, monkeypatch):
     # (garbage-collected) Python objects as the run goes, with a loop of frames
     # on disk listed over and over (the camera circles the same ground)
     import gc
-    import seahough.motion.odometry as O
+    import seahough.motion.odometer as OM
     frames, _ = _sequence("loop", n=24, seed=12)
     paths = _write_frames(frames, tmp_path / "loop")
     seq = [paths[i % len(paths)] for i in range(150)]
     counts = {}
-    advance = O.advance
+    advance = OM.advance
 
     def counting(st, row, tuning):
         advance(st, row, tuning)
@@ -594,7 +594,7 @@ def test_a_long_run_keeps_no_state_per_frame(tmp_path, monkeypatch):
             gc.collect()
             counts[row["index"]] = len(gc.get_objects())
 
-    monkeypatch.setattr(O, "advance", counting)
+    monkeypatch.setattr(OM, "advance", counting)
     res = run_odometry(seq, tmp_path / "o", progress=False, mosaic=True)
     # (a row kept per frame was 3 objects: the dict and its two matrix lists)
     assert counts[149] - counts[49] < 30, counts

@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 import seahough.motion.odometry as O
+import seahough.motion.odometer as OM
 from seahough import sim as S
 from seahough.errors import ParameterError
 from seahough.geometry import apply_matrix, compose, invert_matrix
@@ -214,7 +215,7 @@ def test_a_jump_beyond_the_full_search_is_measured_by_the_wide_try(tmp_path, mon
     assert max(errors) < 0.5, errors                           # the whole track is exact
     assert res.summary["flagged_pairs"] == 0 and res.summary["methods"]["wide"] == 1
     # without the wider region (twice -> once the full search's) the pair is flagged
-    monkeypatch.setattr(O, "WIDEN", 1)
+    monkeypatch.setattr(OM, "WIDEN", 1)
     res1, _ = _cut_run(tmp_path / "b", poses)
     assert res1.rows[6]["status"] == "assumed" and res1.summary["flagged_pairs"] == 2
     assert res1.rows[7]["flags"].startswith("after_gap: measured against frame 6")
@@ -237,7 +238,7 @@ def test_a_sudden_turn_beyond_the_angle_range_is_measured(tmp_path, monkeypatch,
     assert abs(r["rotation"]) == pytest.approx(turn, abs=0.3)
     assert max(errors) < 0.5, errors
     if method == "wide":
-        monkeypatch.setattr(O, "WIDEN", 1)
+        monkeypatch.setattr(OM, "WIDEN", 1)
         res1, _ = _cut_run(tmp_path / "b", poses)
         assert res1.rows[6]["status"] == "assumed"
 

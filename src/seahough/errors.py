@@ -86,6 +86,34 @@ def without_name(exc: BaseException, name) -> str:
     return msg
 
 
+def interrupted(exc: BaseException, kind=KeyboardInterrupt) -> bool:
+    """Is a ``kind`` (a KeyboardInterrupt) among the causes and contexts of ``exc``?
+
+    Ctrl-C inside a compiled (Numba) kernel surfaces as a SystemError caused
+    by the KeyboardInterrupt (raised while the kernel's results are converted).
+
+    >>> try:
+    ...     try:
+    ...         raise KeyboardInterrupt
+    ...     except KeyboardInterrupt as ki:
+    ...         raise SystemError("returned a result with an exception set") from ki
+    ... except SystemError as e:
+    ...     interrupted(e), interrupted(e, OSError)
+    (True, False)
+    """
+    seen = set()
+    todo = [exc]
+    while todo:
+        e = todo.pop()
+        if e is None or id(e) in seen:
+            continue
+        if isinstance(e, kind):
+            return True
+        seen.add(id(e))
+        todo += [e.__cause__, e.__context__]
+    return False
+
+
 __all__ = [
     "SeahoughError",
     "ImageError",

@@ -13,7 +13,7 @@ from pathlib import Path
 import click
 
 from .._validate import default_workers, number
-from ..errors import ParameterError, SeahoughError, without_name
+from ..errors import ParameterError, SeahoughError, interrupted, without_name
 
 PROG = "seahough"
 SHAPES_HELP = ("rect:W,H | line:LENGTH,WIDTH | circle:R | circle:R,INNER (a ring) | "
@@ -63,32 +63,7 @@ def _err(msg: str) -> None:
 _problem = without_name
 
 
-def _interrupted(exc: BaseException, kind=KeyboardInterrupt) -> bool:
-    """Is a ``kind`` (a KeyboardInterrupt) among the causes and contexts of ``exc``?
-
-    Ctrl-C inside a compiled (Numba) kernel surfaces as a SystemError caused
-    by the KeyboardInterrupt (raised while the kernel's results are converted).
-
-    >>> try:
-    ...     try:
-    ...         raise KeyboardInterrupt
-    ...     except KeyboardInterrupt as ki:
-    ...         raise SystemError("returned a result with an exception set") from ki
-    ... except SystemError as e:
-    ...     _interrupted(e), _interrupted(e, OSError)
-    (True, False)
-    """
-    seen = set()
-    todo = [exc]
-    while todo:
-        e = todo.pop()
-        if e is None or id(e) in seen:
-            continue
-        if isinstance(e, kind):
-            return True
-        seen.add(id(e))
-        todo += [e.__cause__, e.__context__]
-    return False
+_interrupted = interrupted   # (the name the CLI modules use)
 
 
 def _out_dir(out: str) -> Path:

@@ -48,30 +48,24 @@ import time
 
 import numpy as np
 
-from .._validate import check_workers, number, pair
-from ..config import ODOMETRY_CONFIG, Config, OdometryTuning
-from ..core.accumulator import check_ranges
-from ..errors import ParameterError, SeahoughError, WriteError
-from ..geometry import apply_matrix, compose, invert_matrix, matrix_power, nearest_similarity
+from .._validate import check_workers
+from ..config import ODOMETRY_CONFIG, OdometryTuning
+from ..errors import ParameterError, SeahoughError, WriteError, interrupted
 from ..io.frames import FrameReader, list_frames
 from ..io.images import to_gray
 from .mosaic import build_mosaic
+from .odometer import TUNING, Odometer  # noqa: F401  (TUNING: the default policy, as before)
 from .prefetch import Prefetch, overlapped
-from .state import Frame, State, advance, ref_cum
+from .state import advance
 from .framing import content_box
-from .searcher import WIDEN, Searcher as _Searcher
-from .runfiles import (RunFolder, check_kept_row, check_kind, open_track, run_settings,
-                       settings_hash, write_output, write_row)
-from .track import (CSV_BASE, CSV_CHECK, CSV_METRIC, CSV_MORE, OdometryResult, Totals,
-                    closing_enumerate, plot_track, resolve_metres_per_pixel, summarise,
-                    iter_odometry_csv, metric_position, pose_columns, row_to_csv)
+from .searcher import Searcher as _Searcher
+from .runfiles import (RunFolder, check_kept_row, check_kind, open_track, write_output,
+                       write_row)
+from .track import (OdometryResult, Totals, closing_enumerate, plot_track, summarise,
+                    iter_odometry_csv, metric_position, row_to_csv)
 
 __all__ = ["run_odometry", "ODOMETRY_CONFIG", "OdometryTuning"]
 
-#: The policy run_odometry follows unless given one.
-TUNING = OdometryTuning()
-
-_IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
 
 def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal_px=None,
@@ -233,31 +227,21 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
       carries that guess (the summary's ``after_gap`` lists these frames).
     """
     t_start = time.perf_counter()
-    cfg = config or ODOMETRY_CONFIG
-    if not isinstance(cfg, Config):
-        raise ParameterError("config must be a seahough.Config")
-    tuning = tuning or TUNING
-    if not isinstance(tuning, OdometryTuning):
-        raise ParameterError("tuning must be a seahough.OdometryTuning")
-    scale_range, _ = check_ranges(scale_range, (0.0, 0.0))
-    angle_range = pair("angle_range", angle_range)  # kept as given: a window around 0
-    if fps is not None:
-        fps = number("fps", fps, lo=0.0, lo_open=True)
-    mpp = resolve_metres_per_pixel(metres_per_pixel, altitude, focal_px)
+    odo = Odometer(scale_range, angle_range, metres_per_pixel=metres_per_pixel,
+                   altitude=altitude, focal_px=focal_px, config=config, tuning=tuning, fps=fps)
     workers = check_workers(workers)
     items = list_frames(frames)
-    reader = FrameReader(items, cfg.max_pixels, cfg.max_memory_mb, fps=fps)
-    settings = run_settings(scale_range, angle_range, mpp, cfg, tuning)
-    if fps is not None:       # (only when given: runs made before resume as they were)
-        settings["fps"] = float(fps)
-    digest = settings_hash(settings)
-    columns = CSV_BASE + (CSV_METRIC if mpp else []) + CSV_MORE + CSV_CHECK
+    cfg = odo.config
+    reader = FrameReader(items, cfg.max_pixels, cfg.max_memory_mb, fps=odo.fps)
     with RunFolder(out_dir) as run:
         check_kind(run.path, "odometry")
         try:
-            return _run(run, reader, items, columns, settings, digest, resume, scale_range,
-                        angle_range, mpp, cfg, tuning, progress, mosaic, t_start,
+            return _run(run, reader, items, odo, resume, progress, mosaic, t_start,
                         (metres_per_pixel, altitude, focal_px, _source(frames)), workers)
+        except SystemError as e:   # (Ctrl-C inside a compiled kernel of a prefetching thread)
+            if interrupted(e):
+                raise KeyboardInterrupt from None
+            raise
         finally:
             reader.close()
 
@@ -270,34 +254,31 @@ def _source(frames) -> str | None:
     return None
 
 
-def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, resume,
-         scale_range, angle_range, mpp, cfg, tuning, progress, mosaic, t_start, given, workers):
+def _run(run: RunFolder, reader: FrameReader, items, odo: Odometer, resume, progress, mosaic,
+         t_start, given, workers):
     """run_odometry in its locked output folder."""
     out, csv_path, json_path = run.path, run.csv, run.json
     run.check_writable(csv_path)
+    cfg, tuning, mpp, settings, digest, columns = (odo.config, odo.tuning, odo.mpp, odo.settings,
+                                                   odo.digest, odo.columns)
+    scale_range, angle_range = odo.scale_range, odo.angle_range
 
     # Rows are not kept in memory (a long survey would grow without bound): each one
     # is written to the CSV as it is finished, the summary is counted as they go
     # by, and the mosaic and the plot read the CSV back.
-    st = State()
+    st = odo.st
     totals = Totals()
-    frames_mem: dict = {}
-    searcher = ahead = None
-
-    def load(i):
-        if i is None:
-            return None
-        if i not in frames_mem:
-            gray_i = to_gray((reader if ahead is None else ahead).raw(i),
-                             max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb,
-                             bit_depth=cfg.bit_depth)
-            frames_mem[i] = Frame(i, searcher.crop(gray_i))
-        return frames_mem[i]
+    ahead = None
+    # (a frame the state needs and the Odometer does not hold: a resumed run's)
+    odo.fetch = lambda i: to_gray((reader if ahead is None else ahead).raw(i),
+                                  max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb,
+                                  bit_depth=cfg.bit_depth)
 
     # ---- resume: check that the rows kept are this run's (settings, frames) and
     # rebuild the state from them, rewriting them (drops a cut-off line) into a new
     # file, read and written one row at a time
     n_resumed = 0
+    kept_hashes: dict = {}     # (the frames the state refers to: a duplicate is told by them)
     if resume and csv_path.exists():
         old_cwd = run.check_settings(settings, digest)
         part = csv_path.with_name(csv_path.name + ".part")
@@ -326,6 +307,9 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
                     advance(st, r, tuning)
                     if r["status"] != "unreadable":
                         st.heading = r["heading"]
+                        kept_hashes[r["index"]] = r.get("frame_hash") or ""
+                        kept_hashes = {k: h for k, h in kept_hashes.items()
+                                       if k in (st.key, st.prev, st.meas)}
                     writer.writerow(row_to_csv(r, columns))
                     totals.add(r)
                     n_resumed += 1
@@ -349,10 +333,10 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
         write_row(fcsv, csv_path, writer.writeheader)
 
     if st.shape is not None:
-        searcher = _Searcher(st.box, scale_range, angle_range, cfg, tuning)
-        load(st.key)
-        load(st.prev)
-        load(st.meas)
+        odo.searcher = _Searcher(st.box, scale_range, angle_range, cfg, tuning)
+        for k in (st.key, st.prev, st.meas):
+            odo.load(k)
+        odo.hashes = {k: h for k, h in kept_hashes.items() if k in odo.frames}
 
     bar = None
     if progress:
@@ -362,48 +346,14 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
                    desc="odometry", dynamic_ncols=True, disable=None, leave=False)
     ahead = Prefetch(reader, n_resumed, max_pixels=cfg.max_pixels,
                      max_memory_mb=cfg.max_memory_mb, workers=workers, bit_depth=cfg.bit_depth)
-    if searcher is not None:
-        ahead.use(searcher, st.shape)
+    if odo.searcher is not None:
+        ahead.use(odo.searcher, st.shape)
     try:
         for i in range(n_resumed, len(items)):
             t0 = time.perf_counter()
-            row = {"index": i, "file": reader.name(i), "time": reader.time(i), "x": None,
-                   "y": None, "heading": None, "scale": None, "confidence": None, "nfa": None,
-                   "flags": "",
-                   "dx": None, "dy": None, "rotation": None, "scale_change": None,
-                   "score": None, "overlap": None, "ref": None, "method": "", "status": "",
-                   "matrix": None, "pair_matrix": None, "_cum": None,
-                   "frame_hash": None, "settings_hash": digest}
-            prep = ahead.get(i)
-            row["frame_hash"], gray = prep.frame_hash, prep.gray
-            if prep.error is None and st.shape is not None and prep.shape != st.shape:
-                prep.error = (f"size {prep.shape[1]}x{prep.shape[0]} differs from the first "
-                              f"frame's {st.shape[1]}x{st.shape[0]}")
-            if prep.error is not None:
-                row["status"] = "unreadable"
-                row["flags"] = f"unreadable: {prep.error}"
-                gray = None
-            if gray is not None:
-                if st.shape is None:
-                    st.shape, st.box = gray.shape, content_box(gray)
-                    searcher = _Searcher(st.box, scale_range, angle_range, cfg, tuning)
-                    ahead.use(searcher, st.shape)
-                gray = Prefetch.finish(prep, searcher, st.key is not None).gray
-                if st.key is None:
-                    row["status"] = "origin"
-                    row["_cum"] = _IDENTITY.copy()
-                else:
-                    _measure_frame(row, i, gray, prep.features, st, searcher, load)
-                frames_mem[i] = frames_mem.get(i) or Frame(i, gray)
-            _finish_row(row, st, mpp)
-            row["ms"] = 1000.0 * (time.perf_counter() - t0)
-            advance(st, row, tuning)
-            if row["status"] != "unreadable":
-                st.heading = row["heading"]
-            # keep only the frames the next one may be measured against
-            for k in list(frames_mem):
-                if k not in (st.key, st.prev, st.meas):
-                    del frames_mem[k]
+            row = odo.step(i, ahead.get(i), reader.name(i), reader.time(i), t0)
+            if ahead.searcher is None and odo.searcher is not None:
+                ahead.use(odo.searcher, st.shape)
             write_row(fcsv, csv_path, lambda: writer.writerow(row_to_csv(row, columns)))
             totals.add(row)
             if bar is not None:
@@ -414,7 +364,7 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
         fcsv.close()
         if bar is not None:
             bar.close()
-    frames_mem.clear()
+    odo.reset()
 
     # ---- outputs (from the CSV, one row at a time; the two pictures at once)
     placed: dict = {}
@@ -445,146 +395,3 @@ def _run(run: RunFolder, reader: FrameReader, items, columns, settings, digest, 
 
     write_output(json_path, write_summary)
     return OdometryResult(None, summary, csv_path, json_path, mosaic_path, trajectory_path)
-
-
-def _measure_frame(row, i, gray, feats, st: State, searcher: _Searcher, load):
-    """Steps 1-4 of run_odometry's notes; fills ``row`` (status, matrix...)."""
-    key = load(st.key)
-    ref_rate = float(np.median(st.rates)) if len(st.rates) >= 2 else None
-    reasons = []
-    res = None
-    n = i - st.meas
-    if st.vel is not None:
-        pred_cum = compose(matrix_power(st.vel, n), st.meas_cum)
-        predicted = compose(pred_cum, invert_matrix(st.key_cum))
-        res, why = searcher.measure(key, gray, feats, predicted, None, n, "prior", ref_rate)
-        reasons.append(why)
-    if res is None:
-        base = compose(st.meas_cum, invert_matrix(st.key_cum))
-        res, why = searcher.measure(key, gray, feats, None, base, n, "full", ref_rate)
-        reasons.append(why)
-    if res is None and st.prev is not None and st.prev != st.key:
-        prev = load(st.prev)
-        res, why = searcher.measure(prev, gray, feats, None, _IDENTITY, i - st.prev, "previous",
-                                    ref_rate)
-        reasons.append(why)
-    if res is None:
-        # the last attempt: the last measured frame, a wider shift region and wider ranges
-        res, why = searcher.measure(load(st.meas), gray, feats, None, _IDENTITY, n, "wide",
-                                    ref_rate, widen=WIDEN)
-        reasons.append(why)
-    if res is None:
-        _assume(row, st, "low_confidence" if "low_confidence" in reasons else (
-            "little_overlap" if "little_overlap" in reasons else (
-                "few_edges" if all(r == "few_edges" for r in reasons) else "no_match")))
-        return
-    if _doubtful(res, st, searcher.tuning):
-        res = _checked(res, i, gray, feats, st, searcher, load, ref_rate)
-    row["status"] = "measured"
-    row["_cum"] = compose(res.matrix, ref_cum(st, res.ref))
-    if res.ref == st.prev and st.prev != st.meas:
-        # (its step is measured; its place rests on the guess of the frame before)
-        row["flags"] = f"after_gap: measured against frame {res.ref}, whose pose was assumed"
-    row["ref"] = res.ref
-    row["method"] = res.method
-    row["confidence"] = res.confidence
-    row["nfa"] = res.nfa
-    row["score"] = res.score
-    row["overlap"] = res.overlap
-
-
-def _assume(row, st: State, why: str) -> None:
-    """A pair that could not be measured: the last measured pose carried on
-    by the last measured velocity (zero motion when none is known yet),
-    flagged with ``why`` and the assumption."""
-    n = row["index"] - st.meas
-    row["status"] = "assumed"
-    if st.vel is not None:
-        row["_cum"] = compose(matrix_power(st.vel, n), st.meas_cum)
-        how = "constant velocity"
-    else:
-        row["_cum"] = st.meas_cum.copy()
-        how = "zero motion"
-    row["flags"] = f"{why}; pose_assumed: {how} since frame {st.meas}"
-
-
-def _doubtful(res, st: State, tuning) -> bool:
-    """Whether a measurement against the keyframe (two or more frames back)
-    is checked by :func:`_checked`: less confident than ``tuning.doubtful``,
-    or found by a search other than the prior's (the motion left the
-    prediction, or there was none: the keyframe's best peak out there may
-    be a look-alike, a tile or a ripple one period on).
-
-    The check of every full search, not only of the second one running off
-    the prior: on the real tiled pool (frames cropped by 3 px) a full
-    search right after a measurement on the prior went a tile off, 7 % of
-    the diagonal at confidence 0.59, where the adjacent frame's own search
-    was right.
-
-    >>> from seahough import OdometryTuning
-    >>> from seahough.motion.searcher import Measure
-    >>> st = State(key=3, meas=5)
-    >>> full = Measure(np.eye(2, 3), 0.6, 0.5, 0.8, ref=3, method="full")
-    >>> _doubtful(full, st, OdometryTuning())          # off the prior
-    True
-    >>> prior = Measure(np.eye(2, 3), 0.6, 0.5, 0.8, ref=3, method="prior")
-    >>> _doubtful(prior, st, OdometryTuning()), _doubtful(
-    ...     Measure(np.eye(2, 3), 0.3, 0.5, 0.8, ref=3, method="prior"), st, OdometryTuning())
-    (False, True)
-    >>> _doubtful(full, State(key=5, meas=5), OdometryTuning())   # the keyframe is the last frame
-    False
-    """
-    if res.ref != st.key or st.meas is None or st.meas == st.key:
-        return False
-    return res.confidence < tuning.doubtful or res.method != "prior"
-
-
-def _checked(res, i, gray, feats, st: State, searcher: _Searcher, load, ref_rate):
-    """A doubtful keyframe measurement against the last measured frame: an
-    old keyframe's peak can be a look-alike (a tile, a ripple one period on)
-    that the nearer frame does not share, and an old keyframe of a scene in
-    relief is off by more than its confidence says. Doubtful:
-    :func:`_doubtful` (the run is where the prior does not hold: a camera
-    that looks ahead, a tiled floor, a turn; a run on the prior is not
-    checked above ``OdometryTuning.doubtful``). When the two disagree, the
-    nearer frame's measurement replaces it if that frame is the adjacent
-    one (the pair with the most overlap and the least change of view,
-    measured as estimate_motion measures a pair), else only if it is more
-    confident.
-
-    Chosen on the dev part of bench/bench_oblique.py (40 rendered tiled
-    floors seen by a forward-oblique camera, seeds 200-239, 10-frame runs):
-    of 14 keyframe measurements two or more frames back, 8 were look-alikes
-    9-24 % of the diagonal off at confidence 0.26-0.82; the adjacent
-    frame's measurement was within 2 % in 6 of those, and within 2 % (and
-    nearer the truth) in all 6 right ones. Steps off by more than 3 %
-    20 -> 14 of 354, within 2 % 322 -> 329. Checking every keyframe
-    measurement did the same there but quadrupled a downward survey's prior
-    pairs (10 -> 43 ms at 640x480); checking also those on the prior after
-    one search off it made the amphora wreck's pairs on the prior 2x slower
-    at the median."""
-    # a full search: in the small prior window a look-alike has only one
-    # runner-up to be measured against (on the tiled pool it confirmed itself)
-    n = i - st.meas
-    check, _ = searcher.measure(load(st.meas), gray, feats, None, _IDENTITY, n, "previous",
-                                ref_rate)
-    if check is None or (n > 1 and check.confidence <= res.confidence):
-        return res
-    implied = compose(res.matrix, compose(st.key_cum, invert_matrix(st.meas_cum)))
-    h, w = st.shape
-    grid = np.array([[0.0, 0.0], [w - 1.0, 0.0], [0.0, h - 1.0], [w - 1.0, h - 1.0]])
-    gap = float(np.max(np.hypot(*(apply_matrix(implied, grid) - apply_matrix(check.matrix, grid)).T)))
-    return check if gap > searcher.tuning.agree_px / searcher.factor else res
-
-
-def _finish_row(row, st: State, mpp):
-    """Pose columns from the cumulative matrix, and the motion from the previous frame."""
-    cum = row["_cum"]
-    if cum is None:
-        return
-    cum = nearest_similarity(cum)
-    row["_cum"] = cum
-    prev = (st.last_pose_cum if st.last_pose is not None and st.last_pose == row["index"] - 1
-            else None)
-    row.update(pose_columns(cum, st.shape, st.heading if st.last_pose is not None else 0.0, mpp,
-                            prev))
