@@ -306,11 +306,12 @@ def test_bit_depth_option_reads_twelve_bit_files(tmp_path):
     assert proc.returncode == 1 and json.loads(proc.stdout.splitlines()[0])["found"] is False
     # why it is not found is said once, on one line, with the file and the option
     # (a sonar user's trial: "not found", and no hint)
-    said = [line for line in proc.stderr.splitlines() if "BitDepthWarning" in line]
+    said = [line for line in proc.stderr.splitlines() if "a 16-bit image" in line]
     assert len(said) == 1 and str(p) in said[0] and "--bit-depth 12" in said[0], proc.stderr
+    assert said[0].startswith("seahough: warning: ")      # (one line, not "seahough:0: ...")
     proc = run("detect", "circle:16", p, "--json", "--bit-depth", "12", "--out", tmp_path / "pics")
     assert proc.returncode == 0 and len(json.loads(proc.stdout)["detections"]) == 3
-    assert "BitDepthWarning" not in proc.stderr
+    assert "a 16-bit image" not in proc.stderr
     # the overlay draws the photo as the search read it, not 16 times too dark
     middle = [cv2.imread(str(tmp_path / d / "b12_overlay.png"), cv2.IMREAD_GRAYSCALE)
               for d in ("dark", "pics")]
@@ -333,7 +334,7 @@ def test_bit_depth_option_reads_twelve_bit_files(tmp_path):
         cv2.imwrite(str(seq / f"f{i}.png"), f.astype(np.uint16) * 16)
     proc = run("odometry", seq, "--out", tmp_path / "o16", "--quiet", "--no-mosaic")
     assert proc.returncode == 1
-    assert proc.stderr.count("BitDepthWarning") == 1 and "--bit-depth 12" in proc.stderr
+    assert proc.stderr.count("a 16-bit image") == 1 and "--bit-depth 12" in proc.stderr
     assert f"{seq / 'f0.png'}: a 16-bit image" in proc.stderr    # (the frame named)
     with open(tmp_path / "o16" / "odometry.csv", newline="") as fh:
         assert [r["flags"].split(";")[0] for r in csv.DictReader(fh)][1:] == ["few_edges"] * 2

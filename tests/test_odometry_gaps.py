@@ -214,11 +214,16 @@ def test_a_jump_beyond_the_full_search_is_measured_by_the_wide_try(tmp_path, mon
     assert r["dx"] == pytest.approx(-190.0, abs=0.5)           # content moved left
     assert max(errors) < 0.5, errors                           # the whole track is exact
     assert res.summary["flagged_pairs"] == 0 and res.summary["methods"]["wide"] == 1
-    # without the wider region (twice -> once the full search's) the pair is flagged
+    # without the wider region (twice -> once the full search's) the pair is
+    # flagged; the next frame is then measured against the last measured one
+    # (frame 5: after a gap its own full search), not against the assumed
+    # frame 6 (an after_gap guess, before 2026-12-07), and the track is exact
     monkeypatch.setattr(OM, "WIDEN", 1)
-    res1, _ = _cut_run(tmp_path / "b", poses)
-    assert res1.rows[6]["status"] == "assumed" and res1.summary["flagged_pairs"] == 2
-    assert res1.rows[7]["flags"].startswith("after_gap: measured against frame 6")
+    res1, errors1 = _cut_run(tmp_path / "b", poses)
+    assert res1.rows[6]["status"] == "assumed" and res1.summary["flagged_pairs"] == 1
+    r7 = res1.rows[7]
+    assert (r7["status"], r7["method"], r7["ref"], r7["flags"]) == ("measured", "full", 5, "")
+    assert max(e for k, e in enumerate(errors1) if k != 6) < 0.5, errors1
 
 
 @pytest.mark.parametrize("turn, method", [(30.0, "previous"), (34.0, "wide")])

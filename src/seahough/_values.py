@@ -14,7 +14,7 @@ from dataclasses import fields
 
 import numpy as np
 
-__all__ = ["ValueEquality", "same_value"]
+__all__ = ["ValueEquality", "same_value", "json_safe"]
 
 
 def same_value(a, b) -> bool:
@@ -60,3 +60,26 @@ class ValueEquality:
             return NotImplemented
         return all(same_value(getattr(self, f.name), getattr(other, f.name))
                    for f in fields(self))
+
+
+def json_safe(obj):
+    """``obj`` with every float that is not finite (an NFA not judged, an
+    unlimited ``max_nfa``) as None, through dicts, lists and tuples: JSON has
+    no Infinity or NaN (Python writes them, and ``jq``, JavaScript's
+    ``JSON.parse`` and most other readers refuse the file).
+
+    >>> json_safe({"max_nfa": float("inf"), "x": [1.5, float("nan")], "n": np.float32(2)})
+    {'max_nfa': None, 'x': [1.5, None], 'n': 2.0}
+    """
+    if isinstance(obj, dict):
+        return {k: json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_safe(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return json_safe(obj.tolist())
+    if isinstance(obj, np.generic):
+        obj = obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+

@@ -86,6 +86,32 @@ def without_name(exc: BaseException, name) -> str:
     return msg
 
 
+def warn_at_caller(message: str, category) -> None:
+    """Warn as from the caller's own line: the first frame of the stack
+    outside seahough (and outside the threads of the standard library that
+    run its workers), as ``warnings.warn(stacklevel=...)`` would, whatever
+    the depth of the call (a warning filed under "seahough:0" pointed at no
+    line of the user's script); "seahough", line 0 when there is none (a
+    worker thread's)."""
+    import os
+    import sys
+    import warnings
+
+    here = os.path.dirname(os.path.abspath(__file__)) + os.sep
+    skip = (here, os.path.dirname(os.path.abspath(warnings.__file__)) + os.sep + "threading.py",
+            os.path.dirname(os.path.abspath(warnings.__file__)) + os.sep + "concurrent")
+    f = sys._getframe(1)
+    while f is not None and os.path.abspath(f.f_code.co_filename).startswith(skip):
+        f = f.f_back
+    if f is None:
+        warnings.warn_explicit(message, category, "seahough", 0, module="seahough")
+        return
+    g = f.f_globals
+    warnings.warn_explicit(message, category, f.f_code.co_filename, f.f_lineno,
+                           module=g.get("__name__", "seahough"),
+                           registry=g.setdefault("__warningregistry__", {}), module_globals=g)
+
+
 def interrupted(exc: BaseException, kind=KeyboardInterrupt) -> bool:
     """Is a ``kind`` (a KeyboardInterrupt) among the causes and contexts of ``exc``?
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 import importlib
 import os
 import signal
+import warnings
 import sys
 import threading
 import time
@@ -194,12 +195,22 @@ def main(argv=None) -> None:
     exit status 2
     """
     old = _catch_signals()
+    shown = warnings.showwarning
+    warnings.showwarning = _show_warning
     try:
         rv = _run(argv)
     finally:
+        warnings.showwarning = shown
         for sig, handler in old.items():
             signal.signal(sig, handler)
     sys.exit(rv)
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning on the command line: one line, ``seahough: warning: ...``
+    (not the Python form, "FILE:LINE: Category: message", whose file and
+    line are seahough's or nobody's)."""
+    click.echo(f"{PROG}: warning: {' '.join(str(message).split())}", err=True)
 
 
 def _run(argv) -> int:

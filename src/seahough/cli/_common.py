@@ -13,6 +13,7 @@ from pathlib import Path
 import click
 
 from .._validate import default_workers, number
+from .._values import json_safe
 from ..errors import ParameterError, SeahoughError, interrupted, without_name
 
 PROG = "seahough"
@@ -44,13 +45,14 @@ def _json_default(o):
 
 
 def _dumps(obj, **kw) -> str:
-    """``obj`` as JSON, numpy values and paths included.
+    """``obj`` as JSON, numpy values and paths included; a float that is not
+    finite as null (JSON has no Infinity: readers refuse it).
 
     >>> import numpy as np
-    >>> _dumps({"x": np.float32(0.5), "p": Path("a")})
-    '{"x": 0.5, "p": "a"}'
+    >>> _dumps({"x": np.float32(0.5), "p": Path("a"), "max_nfa": float("inf")})
+    '{"x": 0.5, "p": "a", "max_nfa": null}'
     """
-    return json.dumps(obj, default=_json_default, allow_nan=True, **kw)
+    return json.dumps(json_safe(obj), default=_json_default, allow_nan=False, **kw)
 
 
 def _err(msg: str) -> None:

@@ -337,7 +337,9 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, draw=None, b
                    "from its ground by hue more than by brightness), or from its grey levels "
                    "(default: colour when the pattern image is painted in colour, an orange or "
                    "a green marker; grey otherwise). In colour a pattern is searched at either "
-                   "polarity unless --polarity says otherwise.")
+                   "polarity: with --colour, unless --polarity says otherwise; a painted "
+                   "pattern searched in colour by default always (its --polarity applies with "
+                   "--grey or --colour).")
 @click.option("--polarity", type=click.Choice(["same", "inverted", "either", "bright", "dark"]),
               default=None, help="Contrast of the object: as in the pattern image (same; for "
               "shapes: bright on dark; bright is the same), inverted (dark on bright; dark is "
@@ -365,7 +367,8 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, draw=None, b
               help="With --out: which pictures, a comma list of overlay, accumulator, edges "
               "(default: all three; the overlay alone takes less than half their time; "
               "curve:WIDTH draws the overlay only).")
-@click.option("--quiet", "-q", is_flag=True, help="No progress bar or notes; results only.")
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar or notes; results only (warnings about an input, e.g. "
+              "its bit depth, are still said).")
 @workers_option("Images searched at once, in threads; results are printed in the order given")
 def detect(pattern, images, scale_range, angle_range, max_results, min_score, min_confidence,
            max_nfa, downscale, keypoints, equalize, smooth, ignore, bit_depth, colour, polarity,

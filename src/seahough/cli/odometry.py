@@ -141,7 +141,9 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
                        seen from above, turns the other way), and its size
                        change since frame 0 (> 1: closer)
       confidence, nfa, score, overlap   the evidence of its step
-      flags            why a step was not measured (below); empty if it was
+      flags            why a step was not measured (below), or after_gap
+                       (measured, against a frame whose pose was assumed);
+                       empty otherwise
       dx, dy, rotation, scale_change    the scene's motion from the
                        previous frame (the camera moved the other way)
       ref, method, status, ms, matrix, pair_matrix   how it was measured,
@@ -154,15 +156,16 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
     low_confidence (a pose no more likely than its runner-up),
     little_overlap (under 15 % of the reference in view), few_edges (too
     few edges: open water, bare sand, exposure: try --equalize),
-    unreadable: WHY (no pose at all). A flagged frame's pose is assumed,
-    said as "pose_assumed: constant velocity since frame N" (or zero
-    motion), drawn hollow and left out of the mosaic. Roll and pitch are
-    not measured: a tilt of the camera shows as a sideways shift.
+    duplicate (the very pixels of the frame before: a camera driver's
+    repeated buffer), unreadable: WHY (no pose at all). A flagged frame's
+    pose is assumed, said as "pose_assumed: constant velocity since frame
+    N" (or zero motion), drawn hollow and left out of the mosaic. Roll and
+    pitch are not measured: a tilt of the camera shows as a sideways shift.
 
     \b
     Exit status: 0 every pair of frames was measured; 1 some frames are
-    flagged (unreadable, or their motion could not be measured: see the
-    CSV's flags column); 2 bad input.
+    flagged (unreadable, their motion could not be measured, or measured
+    after such a gap: see the CSV's flags column); 2 bad input.
 
     \b
     Example:

@@ -428,12 +428,12 @@ def _trace(det, res, gray, w, s_range, length, step_cfg, max_turn, step_nfa, oth
     m = _profile(gray, sx, sy, d, 0.5 * length, lo, hi, polarity)
     if _SEED_BALANCE is not None and (m is None or m[3] < _SEED_BALANCE):
         # (no rope's profile at the seed: its borders are not both there)
-        band = f"a {polarity} band {lo:.3g}-{hi:.3g} px wide" if polarity != "either" \
-            else f"a band {lo:.3g}-{hi:.3g} px wide"
+        band = f"{polarity} band {lo:.3g}-{hi:.3g} px wide" if polarity != "either" \
+            else f"band {lo:.3g}-{hi:.3g} px wide"
         if m is None:
             return (f"a line, but no rope across it: no {band} (the width of curve:WIDTH, "
                     "or --polarity)")
-        return (f"a line, but no rope across it: one border of {band} {m[3]:.2f} as strong "
+        return (f"a line, but no rope across it: one border of a {band} {m[3]:.2f} as strong "
                 f"as the other (under {_SEED_BALANCE:.2g}: the edge of something wider, or a "
                 "rope of the other --polarity)")
     if m is not None:
@@ -541,7 +541,7 @@ def find_curves(image, width, *, width_range=(0.5, 1.5), polarity="bright",
     max_nfa = check_max_nfa(max_nfa)
     min_len = (_MIN_PIECES * length if min_length is None
                else number("min_length", min_length, lo=0.0))
-    cfg = config or Config()
+    cfg = Config() if config is None else config
     gray = prepare_image(to_gray(image, max_pixels=cfg.max_pixels,
                                  max_memory_mb=cfg.max_memory_mb, bit_depth=cfg.bit_depth), cfg)
     cfg = cfg.replace(smooth=0.0)             # (smoothed once, above)

@@ -165,7 +165,7 @@ class Detector:
             pattern = next(iter(self.parts.values())).pattern
         self.pattern = pattern
         (self.scale_range, self.angle_range) = check_ranges(scale_range, angle_range)
-        self.config = config or Config()
+        self.config = Config() if config is None else config
         if not isinstance(self.config, Config):
             raise ParameterError("config must be a seahough.Config")
         # Config.colour None: in colour when the pattern is painted, either

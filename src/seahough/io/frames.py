@@ -25,7 +25,7 @@ import cv2
 import numpy as np
 
 from ..config import MAX_MEMORY_MB
-from ..errors import ImageError, ImageReadError, ParameterError
+from ..errors import ImageError, ImageReadError, ImageValueError, ParameterError
 from .images import read_image
 
 __all__ = ["list_frames", "iter_frames", "time_from_name", "FrameReader", "printable",
@@ -233,7 +233,7 @@ def list_frames(frames) -> list:
             return _video_frames(p)
     out = []
     for it in items:
-        if isinstance(it, np.ndarray):
+        if isinstance(it, np.ndarray) or it is None:   # (None: a frame the camera dropped)
             out.append(it)
         elif isinstance(it, (str, os.PathLike)):
             s = os.fspath(it)
@@ -247,7 +247,8 @@ def list_frames(frames) -> list:
             else:
                 out.append(s)
         else:
-            raise ParameterError(f"frames: unexpected item {type(it).__name__}; expected paths")
+            raise ParameterError(f"frames: item {len(out)} is a {type(it).__name__}; expected "
+                                 "image paths or arrays (None: a dropped frame)")
     if not out:
         raise ParameterError("frames: the list is empty")
     return out
@@ -418,11 +419,12 @@ class FrameReader:
 
     def name(self, i: int) -> str:
         it = self.items[i]
-        return f"frame_{i:05d}" if isinstance(it, np.ndarray) else str(it)
+        return f"frame_{i:05d}" if it is None or isinstance(it, np.ndarray) else str(it)
 
     def is_array(self, i: int) -> bool:
-        """Is frame ``i`` an array given as it is (not read from a file)?"""
-        return isinstance(self.items[i], np.ndarray)
+        """Is frame ``i`` an array given as it is (not read from a file; or
+        None, a dropped frame)?"""
+        return self.items[i] is None or isinstance(self.items[i], np.ndarray)
 
     def is_video(self, i: int) -> bool:
         """Is frame ``i`` a frame of a video (``"video.mp4#<k>"``)?"""
@@ -471,6 +473,8 @@ class FrameReader:
         (False, 9)
         """
         it = self.items[i]
+        if it is None:
+            return ""
         if isinstance(it, np.ndarray):
             return _pixels_fingerprint(it)
         if split_video_ref(str(it)) is not None:
@@ -482,6 +486,8 @@ class FrameReader:
         it = self.items[i]
         if isinstance(it, np.ndarray):
             return it
+        if it is None:
+            raise ImageValueError("no frame (None: a dropped frame)")
         ref = split_video_ref(str(it))
         if ref is None:
             _entry(os.fspath(it))

@@ -23,7 +23,6 @@ from __future__ import annotations
 import contextlib
 import io
 import os
-import warnings
 from pathlib import Path
 
 import cv2
@@ -34,7 +33,7 @@ from PIL import Image
 from .._validate import number
 from ..config import MAX_MEMORY_MB
 from ..errors import (BitDepthWarning, ImageReadError, ImageSizeError, ImageValueError,
-                      LevelsWarning, ParameterError, WriteError)
+                      LevelsWarning, ParameterError, WriteError, warn_at_caller)
 from ._decoders import (_Header, _decode_jpeg, _decode_png, _opencv_decode, _pillow_problem,
                         _quiet_opencv)
 
@@ -458,9 +457,8 @@ def say_levels(lo: float, hi: float, label: str, dim: bool = True) -> None:
     if kind in _SAID_LEVELS:
         return
     _SAID_LEVELS.add(kind)
-    warnings.warn_explicit(
-        f"{label}: a float image read as levels 0-255, {why}; scale it to 0-1 or 0-255",
-        LevelsWarning, "seahough", 0, module="seahough")
+    warn_at_caller(f"{label}: a float image read as levels 0-255, {why}; scale it to 0-1 or "
+                   "0-255", LevelsWarning)
 
 
 #: The numbers of bits :class:`~seahough.errors.BitDepthWarning` was given for.
@@ -482,10 +480,9 @@ def say_bits(top: int, label: str) -> None:
         what = (f"a camera's 10-14-bit samples ({bits} bits hold these)? give its bit depth: "
                 f"Config(bit_depth={max(bits, 10)}), CLI --bit-depth {max(bits, 10)} (a "
                 f"12-bit camera: 12)")
-    warnings.warn_explicit(
-        f"{label}: a 16-bit image whose values reach only {top}, read as 16-bit data "
-        f"(levels up to {top / 257.0:.3g} of 255: too dark to show most edges); {what}",
-        BitDepthWarning, "seahough", 0, module="seahough")
+    warn_at_caller(f"{label}: a 16-bit image whose values reach only {top}, read as 16-bit data "
+                   f"(levels up to {top / 257.0:.3g} of 255: too dark to show most edges); {what}",
+                   BitDepthWarning)
 
 
 def uint16_divisor(bit_depth: int | None = None) -> float:

@@ -1,7 +1,9 @@
 """Photo motion: one frame pair, and whole dives.
 
 - :mod:`.pair`: :func:`estimate_motion`, the one way to measure a pair
-- :mod:`.odometry`: :func:`run_odometry`, the keyframe / prior / fallback policy
+- :mod:`.odometry`: :func:`run_odometry`, a whole sequence, row by row to a CSV
+- :mod:`.odometer`: :class:`Odometer`, one frame at a time (a camera's stream), and the
+  keyframe / prior / fallback policy both follow
 - :mod:`.state`: what the next frame needs (rebuilt from the rows on resume)
 - :mod:`.track`: the CSV rows, the summary, :class:`OdometryResult`
 - :mod:`.runfiles`: the output folder: one run at a time, what ``resume`` checks
@@ -9,9 +11,10 @@
 """
 
 from ..config import MOTION_CONFIG, ODOMETRY_CONFIG, OdometryTuning
+from .odometer import Odometer
 from .odometry import run_odometry
 from .pair import Motion, estimate_motion
 from .track import OdometryResult, read_odometry_csv
 
 __all__ = ["MOTION_CONFIG", "ODOMETRY_CONFIG", "OdometryTuning", "Motion", "estimate_motion",
-           "OdometryResult", "read_odometry_csv", "run_odometry"]
+           "OdometryResult", "Odometer", "read_odometry_csv", "run_odometry"]

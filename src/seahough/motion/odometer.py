@@ -85,10 +85,10 @@ class Odometer:
     def __init__(self, scale_range=(0.9, 1.1), angle_range=(-20.0, 20.0), *,
                  metres_per_pixel=None, altitude=None, focal_px=None, config=None,
                  tuning: OdometryTuning | None = None, fps: float | None = None):
-        cfg = config or ODOMETRY_CONFIG
+        cfg = ODOMETRY_CONFIG if config is None else config
         if not isinstance(cfg, Config):
             raise ParameterError("config must be a seahough.Config")
-        tuning = tuning or TUNING
+        tuning = TUNING if tuning is None else tuning
         if not isinstance(tuning, OdometryTuning):
             raise ParameterError("tuning must be a seahough.OdometryTuning")
         self.scale_range, _ = check_ranges(scale_range, (0.0, 0.0))
@@ -141,7 +141,7 @@ class Odometer:
         t0 = _time.perf_counter()
         cfg = self.config
         if frame is None:
-            prep = Prepared(i, "", error="no frame (None): the camera gave none")
+            prep = Prepared(i, "", error="no frame (None: a dropped frame)")
             label = f"frame_{i:05d}"
         else:
             reader = FrameReader([frame], cfg.max_pixels, cfg.max_memory_mb)
@@ -246,6 +246,15 @@ def _measure_frame(row, i, gray, feats, st: State, searcher: _Searcher, load):
     if res is None:
         base = compose(st.meas_cum, invert_matrix(st.key_cum))
         res, why = searcher.measure(key, gray, feats, None, base, n, "full", ref_rate)
+        reasons.append(why)
+    if res is None and st.prev != st.meas and st.meas != st.key:
+        # after a gap (the last frames' poses assumed: a bad frame, a fish), the
+        # last measured frame's full search too, as estimate_motion measures a
+        # pair: nearer than the keyframe, and the wide try against it searches
+        # for twice the motion (a good frame after one bad frame was flagged
+        # no_match: its keyframe 5 frames back, the wide try too wide to vote)
+        res, why = searcher.measure(load(st.meas), gray, feats, None, _IDENTITY, n, "full",
+                                    ref_rate)
         reasons.append(why)
     if res is None and st.prev is not None and st.prev != st.key:
         prev = load(st.prev)

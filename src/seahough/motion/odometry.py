@@ -51,6 +51,7 @@ import numpy as np
 from .._validate import check_workers
 from ..config import ODOMETRY_CONFIG, OdometryTuning
 from ..errors import ParameterError, SeahoughError, WriteError, interrupted
+from .._values import json_safe
 from ..io.frames import FrameReader, list_frames
 from ..io.images import to_gray
 from .mosaic import build_mosaic
@@ -158,6 +159,9 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
        the window.
     2. ``full``: against the keyframe, with the whole ``scale_range`` /
        ``angle_range`` around the last measured motion and +-half a frame.
+       After a gap (the frames since the last measured one were assumed: a
+       bad frame, a fish), then against that last measured frame too, as
+       :func:`~seahough.estimate_motion` measures a pair.
     3. ``previous``: against the previous readable frame (when it is not
        the keyframe), full search; it then becomes the keyframe.
     4. ``wide``: the last try before the pair is flagged: against the last
@@ -167,8 +171,9 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
        then becomes the keyframe. A sudden jump, turn or change of altitude
        beyond the per-frame ranges is measured here, not flagged.
 
-    A search of the adjacent frame without a prior (the first pair, 2. while
-    the keyframe is the previous frame, 3., 4. one frame on) is measured as
+    A search of a frame directly, without a prior and not through a
+    keyframe (the first pair, 2. while the keyframe is the previous frame or
+    after a gap, 3., 4.) is measured as
     :func:`~seahough.estimate_motion` measures a pair: coarse to fine and a
     check of the candidates as homographies when the vote cannot vouch for
     its answer (a repeated texture, a camera that looks ahead), so that its
@@ -203,6 +208,9 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
       readable frame is measured against the keyframe across the gap. (A
       path of a *list* of frames that is not there, a broken link or a
       folder, is refused before the run starts: ParameterError.)
+    - ``duplicate: the same pixels as frame N``: the frame is frame N over
+      again (a camera driver handing the same buffer twice): not measured
+      (its motion is not known), its pose assumed as below.
     - ``no_match`` (no pose of the reference frame was found in this one),
       ``low_confidence`` (one was found, but not distinct from its
       runner-up, or matching far worse than the last frames did),
@@ -390,7 +398,7 @@ def _run(run: RunFolder, reader: FrameReader, items, odo: Odometer, resume, prog
 
     def write_summary():
         with open(json_path, "w") as f:
-            json.dump(summary, f, indent=2)
+            json.dump(json_safe(summary), f, indent=2)
             f.write("\n")
 
     write_output(json_path, write_summary)

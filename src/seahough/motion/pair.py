@@ -216,7 +216,7 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
     >>> bool(abs(err).max() < 1.0)      # within a pixel at the frame's corners
     True
     """
-    cfg = config or MOTION_CONFIG
+    cfg = MOTION_CONFIG if config is None else config
     if not isinstance(cfg, Config):
         raise ParameterError("config must be a seahough.Config")
     _check_thresholds(max_shift, min_confidence, min_score)

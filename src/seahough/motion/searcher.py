@@ -101,7 +101,7 @@ class Searcher:
         # on the real tiled pool they measured 11 of 11 pairs, against 10, but 4
         # steps, their least-squares similarities composed with the vote's against a
         # keyframe, moved 35-60 px from the reference where they had been 10-31 px.
-        # A search of the adjacent frame without a prior gets both (``adjacent``:
+        # A frame searched directly without a prior gets both (``adjacent``:
         # measured as estimate_motion measures a pair; see measure())
         return measure_pair(pattern, gray, s_range, (a0, a1), region,
                             min_score=self.tuning.min_score,
@@ -183,15 +183,15 @@ class Searcher:
             span = min(n, t.max_span) * widen
             mx, my = t.full_shift * w * span, t.full_shift * h * span
             region = (bx - mx, by - my, bx + mx, by + my)
-        # the adjacent frame searched without a prior (the first pair, the
-        # previous frame's try, a wide try one frame on): measured as
+        # a frame searched directly without a prior, not through a keyframe
+        # (the first pair, the previous frame's try, the last measured frame's
+        # after a gap, the wide try; a frame or two apart): measured as
         # estimate_motion does, coarse to fine and the check of the candidates
         # when the vote cannot vouch for its answer. Over 40 rendered tiled floors
         # seen by a forward-oblique camera (bench/bench_oblique.py's dev part,
         # 10-frame runs) pairs measured 182 -> 354 of 360, steps within 2 % of the
         # diagonal 103 -> 322, off by more than 3 % 26 -> 20
-        adjacent = (predicted is None and n == 1 and base is not None
-                    and np.allclose(base, _SAME))
+        adjacent = predicted is None and base is not None and np.allclose(base, _SAME)
         try:
             d = self._run(pattern, gray, feats, sr, ar, region,
                           self.prior_cfg if predicted is not None else self.cfg,

@@ -31,6 +31,7 @@ from .._validate import number, pair
 from ..config import ODOMETRY_CONFIG, Config, OdometryTuning
 from ..core.accumulator import check_ranges
 from ..errors import ParameterError, SeahoughError, WriteError
+from .._values import json_safe
 from ..io.frames import FrameReader, list_frames
 from ..motion.mosaic import build_mosaic
 from ..motion.runfiles import (RunFolder, check_kind, format_change, run_settings, settings_changes,
@@ -216,10 +217,10 @@ def odometry(frames, out, *, workers=None, scheduler=None, chunk_size=200,
     (30, 0, 2)
     """
     t_start = time.perf_counter()
-    cfg = config or ODOMETRY_CONFIG
+    cfg = ODOMETRY_CONFIG if config is None else config
     if not isinstance(cfg, Config):
         raise ParameterError("config must be a seahough.Config")
-    tuning = tuning or OdometryTuning()
+    tuning = OdometryTuning() if tuning is None else tuning
     if not isinstance(tuning, OdometryTuning):
         raise ParameterError("tuning must be a seahough.OdometryTuning")
     scale_range, _ = check_ranges(scale_range, (0.0, 0.0))
@@ -333,7 +334,7 @@ def _chain_and_write(run: RunFolder, reader, items, results, columns, digest, mp
 
     def write_summary():
         with open(run.json, "w") as fj:
-            json.dump(summary, fj, indent=2)
+            json.dump(json_safe(summary), fj, indent=2)
             fj.write("\n")
 
     write_output(run.json, write_summary)
