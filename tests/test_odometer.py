@@ -176,3 +176,30 @@ def test_summary_and_cli_json_are_strict_json(tmp_path, capsys):
     assert exit_.value.code == 0
     out = capsys.readouterr().out
     assert _strict(out)["summary"]["settings"]["tuning"]["max_nfa"] is None
+
+
+def test_measure_motion_says_why_there_is_no_motion(caplog):
+    """A user's trial: why estimate_motion returned None was only logged;
+    a vehicle's fallback needs it as a value (measure_motion)."""
+    import logging
+
+    prev, cur, truth = S.frame_pair(seed=4, source="procedural")
+    res = seahough.measure_motion(prev, cur)
+    assert res and res.reason == "" and res.motion == seahough.estimate_motion(prev, cur)
+    assert res.best == res.motion
+    blank = np.full_like(prev, 90)
+    for a, b, why in ((blank, cur, "the previous frame has no edges"),
+                      (prev, blank, "the current frame has no edges")):
+        r = seahough.measure_motion(a, b)
+        assert not r and r.motion is None and r.best is None and r.reason.startswith(why)
+    with caplog.at_level(logging.INFO, logger="seahough.motion"):
+        declined = seahough.measure_motion(prev, cur, min_confidence=1.0)
+        assert seahough.estimate_motion(prev, cur, min_confidence=1.0) is None
+    assert declined.motion is None and declined.reason.startswith("confidence ")
+    assert "under min_confidence 1" in declined.reason
+    assert f"no motion: {declined.reason}" in caplog.text            # the same words
+    assert abs(declined.best.angle - truth.angle) < 0.5 and declined.best.confidence < 1.0
+    # a frame with a border: the best motion is in whole-frame pixels too
+    framed = [np.pad(f, ((12, 0), (20, 0), (0, 0))) for f in (prev, cur)]
+    r = seahough.measure_motion(*framed, min_confidence=1.0)
+    assert r.best is not None and r.best.dx == pytest.approx(declined.best.dx, abs=1.0)

@@ -30,7 +30,8 @@ _WHERE = {
     "Pattern": ".core.pattern",
     "Curve": ".core.curves", "find_curves": ".core.curves",
     "Motion": ".motion", "estimate_motion": ".motion", "run_odometry": ".motion",
-    "OdometryResult": ".motion", "Odometer": ".motion",
+    "OdometryResult": ".motion", "Odometer": ".motion", "measure_motion": ".motion",
+    "MotionResult": ".motion",
     "list_frames": ".io.frames", "iter_frames": ".io.frames", "read_image": ".io.images",
     "to_gray": ".io.images",
     "Similarity": ".geometry", "pose_to_matrix": ".geometry", "matrix_to_pose": ".geometry",
@@ -48,7 +49,7 @@ _SUBMODULES = ("cli", "config", "core", "demo", "errors", "geometry", "io", "mot
 
 __all__ = [
     "Config", "Detection", "Detector", "SearchResult", "Pattern", "Motion", "estimate_motion",
-    "run_odometry", "Odometer", "list_frames", "iter_frames", "OdometryResult", "OdometryTuning",
+    "measure_motion", "MotionResult", "run_odometry", "Odometer", "list_frames", "iter_frames", "OdometryResult", "OdometryTuning",
     "SearchTuning",
     "Similarity", "pose_to_matrix", "matrix_to_pose", "solve_segment_pair", "read_image", "to_gray",
     "SeahoughError", "ImageError", "ImageReadError", "ImageSizeError", "ImageValueError",
@@ -94,4 +95,5 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and IDEs only
     from .geometry import Similarity, matrix_to_pose, pose_to_matrix, solve_segment_pair
     from .io.frames import iter_frames, list_frames
     from .io.images import read_image, to_gray
-    from .motion import Motion, Odometer, OdometryResult, estimate_motion, run_odometry
+    from .motion import (Motion, MotionResult, Odometer, OdometryResult, estimate_motion,
+                         measure_motion, run_odometry)

@@ -80,7 +80,10 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     ----------
     frames : folder, video file, or list of image paths (or of videos) or of arrays
         See :func:`seahough.io.frames.list_frames` (frames of any size, depth and colour; all
-        must have the first readable frame's size).
+        must have the first readable frame's size; None in a list: a dropped frame, an
+        ``unreadable`` row). A generator is read to its end before the run starts
+        (its arrays held in memory): a live camera's frames, which never end, go to
+        :class:`~seahough.Odometer` one at a time.
     out_dir : path
         Created if needed; receives ``odometry.csv`` (written and flushed
         row by row), ``run.json`` (the settings), then ``summary.json``,

@@ -21,8 +21,8 @@ from .perspective import check_perspective, judge_homography, shared_agreement
 from .pyramid import CoarseVote, coarse_to_fine, coarse_vote, ladder
 from .repeats import resolve
 from .._validate import check_max_nfa, number
-from .._values import ValueEquality
 from ..io.images import to_gray
+from .result import Motion, MotionResult
 from .framing import MIN_MOTION_SIDE, check_motion_size, content_box  # noqa: F401  (their home was here)
 
 #: Why :func:`estimate_motion` returned None, at INFO level (``logging.basicConfig(level=logging.INFO)``).
@@ -66,86 +66,6 @@ REPEATED = 0.27
 SHIFTED = 1.0
 
 
-@dataclass(eq=False)
-class Motion(ValueEquality):
-    """Motion of the image content from the previous frame to the current one.
-
-    Attributes
-    ----------
-    matrix : ndarray (2, 3)
-        Previous-frame pixel (x, y) -> current-frame pixel (x, y).
-    dx, dy : float
-        Shift of the previous frame's centre, in current-frame pixels.
-    angle : float
-        Rotation in degrees (counter-clockwise as displayed), in [-180, 180).
-    scale : float
-        Size change (> 1: the camera came closer).
-    confidence : float
-        How distinct the accumulator peak was (0-1).
-    score : float
-        Share of the previous frame's edge points (inside the overlap) found
-        again.
-    overlap : float
-        Share of the previous frame that is still in view.
-    nfa : float
-        Number of false alarms of the measurement (:attr:`seahough.Detection.nfa`):
-        how many motions this well supported a search of this pair would
-        find by chance; the smaller, the stronger the evidence (NaN: not
-        known).
-    parallax : float
-        How far parts of the frame stray from the similarity (pixels): the
-        seabed's relief seen from two places, or a camera that looks
-        obliquely (NaN: not measured). Measured tile by tile, the median
-        distance of the tiles' shifts; refitted as a homography, the RMS
-        distance of the homography from the similarity over the frame.
-    homography : ndarray (3, 3) or None
-        Previous-frame pixel -> current-frame pixel as a homography fitted
-        to the parts of the frame (a plane seen from two places; None: not
-        measured).
-
-    When the similarity alone was not confident enough and the pair was
-    measured tile by tile (:mod:`seahough.motion.parallax`: a seabed in
-    relief), ``confidence``, ``score`` and ``nfa`` are those of that
-    measurement, with each part of the frame allowed a small shift of its
-    own, and ``parallax`` is how far the parts stray from the similarity
-    fitted to them. When the vote hardly preferred its answer (a tiled
-    floor, a camera that looks ahead) and the pair was measured again as a
-    homography, coarse to fine (:mod:`seahough.motion.pyramid`) or from the
-    vote's candidates (:mod:`seahough.motion.perspective`), they are those
-    of the homography (the confidence: that of the coarse vote, or of the
-    candidates' homographies), the matrix is the similarity that fits it
-    best over the frame, and ``homography`` is it.
-    """
-
-    matrix: np.ndarray
-    dx: float
-    dy: float
-    angle: float
-    scale: float
-    confidence: float
-    score: float
-    overlap: float
-    nfa: float = float("nan")
-    parallax: float = float("nan")
-    homography: np.ndarray | None = None
-    note: str = ""              # why its confidence was lowered, when it was
-
-    def to_dict(self) -> dict:
-        """Plain-Python form for JSON (``nfa`` None when not known).
-
-        >>> m = Motion(np.eye(2, 3), 1.0, 0.0, 0.0, 1.0, 0.9, 0.8, 0.95)
-        >>> m.to_dict()["nfa"], Motion(np.eye(2, 3), 0, 0, 0, 1, 1, 1, 1, 1e-12).to_dict()["nfa"]
-        (None, 1e-12)
-        """
-        return {"matrix": np.asarray(self.matrix).tolist(), "dx": self.dx, "dy": self.dy,
-                "angle": self.angle, "scale": self.scale, "confidence": self.confidence,
-                "score": self.score, "overlap": self.overlap,
-                "nfa": float(self.nfa) if math.isfinite(self.nfa) else None,
-                "parallax": float(self.parallax) if math.isfinite(self.parallax) else None,
-                "homography": (None if self.homography is None
-                               else np.asarray(self.homography).tolist())}
-
-
 def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30.0, 30.0), *,
                     max_shift: float = 0.5, min_confidence: float = 0.15, min_score: float = 0.15,
                     max_nfa: float = 1.0, config: Config | None = None,
@@ -185,7 +105,7 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
         ``min_score``, ``max_nfa`` the best motion missed, with its
         figures) is logged at INFO level on the
         ``"seahough.motion"`` logger (``logging.basicConfig(level=logging.INFO)``
-        prints it).
+        prints it), and :func:`measure_motion` returns it as a value.
 
     Raises
     ------
@@ -216,6 +136,37 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
     >>> bool(abs(err).max() < 1.0)      # within a pixel at the frame's corners
     True
     """
+    res = measure_motion(previous, current, scale_range, angle_range, max_shift=max_shift,
+                         min_confidence=min_confidence, min_score=min_score, max_nfa=max_nfa,
+                         config=config, homography=homography)
+    if res.motion is None:
+        log.info("no motion: %s", res.reason)
+    return res.motion
+
+
+def measure_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30.0, 30.0), *,
+                   max_shift: float = 0.5, min_confidence: float = 0.15, min_score: float = 0.15,
+                   max_nfa: float = 1.0, config: Config | None = None,
+                   homography: bool = False) -> MotionResult:
+    """:func:`estimate_motion`, with why it gave no motion: a
+    :class:`~seahough.motion.MotionResult` (``motion``: the answer or None;
+    ``reason``: why None, "" when answered; ``best``: the best motion found,
+    also when declined). The parameters are :func:`estimate_motion`'s.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from seahough import sim
+    >>> prev, cur, truth = sim.frame_pair(seed=4, source="procedural")
+    >>> measure_motion(prev, cur).reason
+    ''
+    >>> r = measure_motion(prev, np.full_like(cur, 90))     # a blank frame: no motion, and why
+    >>> r.motion is None, r.reason
+    (True, 'the current frame has no edges to match (blank, dark, overexposed or out of focus?)')
+    >>> r = measure_motion(prev, cur, min_confidence=1.0)   # declined: the best one says how
+    >>> r.motion is None, r.reason.split(" (")[0].split()[-2:], round(r.best.angle)
+    (True, ['min_confidence', '1'], 19)
+    """
     cfg = MOTION_CONFIG if config is None else config
     if not isinstance(cfg, Config):
         raise ParameterError("config must be a seahough.Config")
@@ -240,20 +191,25 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
     except PatternError as e:
         # (a blank or featureless frame is data, as a blank current one: the
         # motion is unknown, and a loop over a dive goes on)
-        log.info("no motion: the previous frame has no edges to match (blank, dark, "
-                 "overexposed or out of focus?): %s", e)
-        return None
+        return MotionResult(None, "the previous frame has no edges to match (blank, dark, "
+                            f"overexposed or out of focus?): {e}")
     # (the pattern keeps its own 8-bit copy, or a float copy of fractional
     # levels; a large frame's float copies go at once: a 12 MP pair held 4 of
     # them, 190 MB, through the search)
     del prev
     cur = np.ascontiguousarray(cur[y0:y1, x0:x1])
-    m = motion_from_pattern(pattern, cur, scale_range, angle_range,
-                            max_shift=max_shift, min_confidence=min_confidence,
-                            min_score=min_score, max_nfa=max_nfa, config=cfg,
-                            homography=homography)
-    if m is None or (x0, y0) == (0, 0):
-        return m
+    res = _pattern_motion(pattern, cur, scale_range, angle_range, max_shift=max_shift,
+                          min_confidence=min_confidence, min_score=min_score, max_nfa=max_nfa,
+                          config=cfg, homography=homography)
+    if (x0, y0) != (0, 0):
+        res.motion, res.best = (None if m is None else _uncropped(m, x0, y0, w, h)
+                                for m in (res.motion, res.best))
+    return res
+
+
+def _uncropped(m: Motion, x0: int, y0: int, w: int, h: int) -> Motion:
+    """A motion measured on the frames' content boxes (from ``x0, y0``),
+    in whole-frame pixels."""
     full = shift_origin(m.matrix, -x0, -y0)
     c = frame_centre((h, w))
     dx, dy = full[:, :2] @ c + full[:, 2] - c
@@ -262,7 +218,7 @@ def estimate_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30
         t = np.array([[1.0, 0.0, -x0], [0.0, 1.0, -y0], [0.0, 0.0, 1.0]])
         hom = np.linalg.inv(t) @ hom @ t
     return Motion(full, float(dx), float(dy), m.angle, m.scale, m.confidence, m.score,
-                  overlap(full, w, h), m.nfa, m.parallax, hom)
+                  overlap(full, w, h), m.nfa, m.parallax, hom, m.note)
 
 
 def frame_factor(shape, config: Config, scale_range) -> float:
@@ -531,7 +487,19 @@ def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
     from two places, and a single similarity leaves its parallax out; the
     thresholds then judge that measurement.
     """
-    cfg = config or MOTION_CONFIG
+    res = _pattern_motion(pattern, current, scale_range, angle_range, max_shift=max_shift,
+                          min_confidence=min_confidence, min_score=min_score, max_nfa=max_nfa,
+                          config=config, features=features, homography=homography)
+    if res.motion is None:
+        log.info("no motion: %s", res.reason)
+    return res.motion
+
+
+def _pattern_motion(pattern: Pattern, current, scale_range, angle_range, *, max_shift,
+                    min_confidence, min_score, max_nfa, config: Config | None,
+                    features: Features | None = None, homography: bool = False) -> MotionResult:
+    """:func:`motion_from_pattern`'s :class:`MotionResult`."""
+    cfg = MOTION_CONFIG if config is None else config
     _check_thresholds(max_shift, min_confidence, min_score)
     max_nfa = check_max_nfa(max_nfa)
     cur = to_gray(current, name="current frame", max_pixels=cfg.max_pixels,
@@ -548,12 +516,13 @@ def motion_from_pattern(pattern: Pattern, current, scale_range=(0.8, 1.25),
                      min_confidence=min_confidence, config=cfg, features=features,
                      tiles=homography, notes=notes)
     why = declined(r, min_confidence, min_score, max_nfa, notes[0] if notes else "")
-    if why:
-        log.info("no motion: %s", why)
-        return None
-    x, y, scale, angle = r.pose((ox, oy))
-    return Motion(r.matrix, x - ox, y - oy, wrap_angle(angle, low=-180.0), scale, r.confidence,
-                  r.score, overlap(r.matrix, w, h), float(r.nfa), r.parallax, r.homography)
+    best = None
+    if r is not None:
+        x, y, scale, angle = r.pose((ox, oy))
+        best = Motion(r.matrix, x - ox, y - oy, wrap_angle(angle, low=-180.0), scale,
+                      r.confidence, r.score, overlap(r.matrix, w, h), float(r.nfa), r.parallax,
+                      r.homography, r.note)
+    return MotionResult(None if why else best, why, best)
 
 
 #: The search's note for a frame without edges (:data:`~seahough.core.detector.SEARCH_NOTES`).
