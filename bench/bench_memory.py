@@ -35,6 +35,7 @@ from _common import command, machine  # noqa: E402
 import cv2  # noqa: E402
 
 import seahough  # noqa: E402
+import seahough.motion.odometer as odometer  # noqa: E402
 import seahough.motion.odometry as odometry  # noqa: E402
 from seahough import sim as S  # noqa: E402
 
@@ -149,7 +150,7 @@ def odometry_pass(args, tmp: Path) -> None:
 
     probe = Probe(not args.no_tracemalloc)
     marks = _marks(args)
-    advance = odometry.advance
+    advance = odometer.advance   # (the per-frame step's, motion/odometer.py)
 
     def advance_and_probe(st, row, tuning):    # called once per frame, after its row is written
         advance(st, row, tuning)
@@ -160,13 +161,13 @@ def odometry_pass(args, tmp: Path) -> None:
         elif i in marks:
             probe.checkpoint(i)
 
-    odometry.advance = advance_and_probe
+    odometer.advance = advance_and_probe
     t = time.perf_counter()
     try:
         res = odometry.run_odometry(paths, tmp / "odometry", progress=False,
                                     mosaic=not args.no_mosaic)
     finally:
-        odometry.advance = advance
+        odometer.advance = advance
     total_s = time.perf_counter() - t
     probe.checkpoint(args.frames, label="after mosaic and plot" if not args.no_mosaic
                      else "after plot")

@@ -534,3 +534,45 @@ def test_a_painted_crop_of_a_video_frame_is_searched_in_grey_when_colour_finds_n
     assert res.detections == []
     assert any(c.declined.startswith("NFA") and math.isclose(c.nfa, 2 * twin.nfa)
                for c in res.candidates), [(c.nfa, c.declined) for c in res.candidates]
+
+
+def test_counting_many_objects_finds_them_and_says_when_the_list_was_cut(tmp_path):
+    """A scientist's trial: 40 rings drawn on a real seabed photo, searched with
+    max_results 50: 1,200 key points left the fainter ones without any (about
+    half found, each at confidence 1, no flag). A search for more than 5
+    results takes 240 key points for each. And with fewer results asked for
+    than objects there, the result says how many candidates were left out."""
+    from seahough import Config, Detector, Pattern
+
+    photo = cv2.imread(str(data_path("sequences/dtu_seabed_pair/scene1.png")))
+    img = cv2.resize(photo, (640, 480), interpolation=cv2.INTER_AREA)
+    rng = np.random.default_rng(3)
+    pts = []
+    while len(pts) < 40:
+        x, y, r = rng.uniform(25, 615), rng.uniform(25, 455), rng.uniform(12, 20)
+        if all(math.hypot(x - a, y - b) > 1.3 * (r + c) for a, b, c in pts):
+            pts.append((x, y, r))
+    for x, y, r in pts:
+        level = int(rng.uniform(150, 230))
+        cv2.circle(img, (round(16 * x), round(16 * y)), round(16 * r), (level,) * 3, -1,
+                   cv2.LINE_AA, 4)
+        hole = cv2.resize(photo, (640, 480), interpolation=cv2.INTER_AREA)   # (the seabed shows)
+        m = np.zeros(img.shape[:2], np.uint8)
+        cv2.circle(m, (round(16 * x), round(16 * y)), round(16 * 0.6 * r), 255, -1, cv2.LINE_AA, 4)
+        img[m > 127] = hole[m > 127]
+    ring = Pattern.circle(15, inner_radius=9)
+
+    def found(det):
+        res = det.search(img)
+        hit = {i for d in res.detections for i, (x, y, r) in enumerate(pts)
+               if math.hypot(d.x - x, d.y - y) < 0.5 * r}
+        return res, len(hit), len(res.detections) - len(hit)
+
+    res, hits, false = found(Detector(ring, (0.6, 1.6), max_results=50))
+    assert hits >= 36 and false == 0, (hits, false)
+    assert res.left_out == 0
+    few, hits_few, _ = found(Detector(ring, (0.6, 1.6), max_results=50,
+                                      config=Config(n_keypoints=1201)))   # (~ as before)
+    assert hits_few < hits - 5, (hits_few, hits)
+    cut, _, _ = found(Detector(ring, (0.6, 1.6), max_results=10))
+    assert len(cut.detections) == 10 and cut.left_out >= 1

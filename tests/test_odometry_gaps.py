@@ -222,7 +222,7 @@ def test_a_jump_beyond_the_full_search_is_measured_by_the_wide_try(tmp_path, mon
     res1, errors1 = _cut_run(tmp_path / "b", poses)
     assert res1.rows[6]["status"] == "assumed" and res1.summary["flagged_pairs"] == 1
     r7 = res1.rows[7]
-    assert (r7["status"], r7["method"], r7["ref"], r7["flags"]) == ("measured", "full", 5, "")
+    assert (r7["status"], r7["method"], r7["ref"], r7["flags"]) == ("measured", "recover", 5, "")
     assert max(e for k, e in enumerate(errors1) if k != 6) < 0.5, errors1
 
 

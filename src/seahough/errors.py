@@ -92,16 +92,23 @@ def warn_at_caller(message: str, category) -> None:
     run its workers), as ``warnings.warn(stacklevel=...)`` would, whatever
     the depth of the call (a warning filed under "seahough:0" pointed at no
     line of the user's script); "seahough", line 0 when there is none (a
-    worker thread's)."""
+    worker thread's). Filter them by category (``warnings.filterwarnings(
+    "ignore", category=seahough.BitDepthWarning)``): their module is the
+    caller's."""
     import os
     import sys
     import warnings
 
-    here = os.path.dirname(os.path.abspath(__file__)) + os.sep
-    skip = (here, os.path.dirname(os.path.abspath(warnings.__file__)) + os.sep + "threading.py",
-            os.path.dirname(os.path.abspath(warnings.__file__)) + os.sep + "concurrent")
+    def where(path: str) -> str:
+        return os.path.normcase(os.path.abspath(path))
+
+    here = where(os.path.dirname(__file__)) + os.sep
+    stdlib = getattr(warnings, "__file__", None)   # (None in some frozen builds)
+    skip = (here,) if stdlib is None else (
+        here, where(os.path.dirname(stdlib)) + os.sep + "threading.py",
+        where(os.path.dirname(stdlib)) + os.sep + "concurrent")
     f = sys._getframe(1)
-    while f is not None and os.path.abspath(f.f_code.co_filename).startswith(skip):
+    while f is not None and where(f.f_code.co_filename).startswith(skip):
         f = f.f_back
     if f is None:
         warnings.warn_explicit(message, category, "seahough", 0, module="seahough")

@@ -194,8 +194,9 @@ def main(argv=None) -> None:
     ...     print("exit status", e.code)
     exit status 2
     """
+    global _PYTHON_SHOWWARNING
     old = _catch_signals()
-    shown = warnings.showwarning
+    shown = _PYTHON_SHOWWARNING = warnings.showwarning
     warnings.showwarning = _show_warning
     try:
         rv = _run(argv)
@@ -207,10 +208,18 @@ def main(argv=None) -> None:
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
-    """A warning on the command line: one line, ``seahough: warning: ...``
-    (not the Python form, "FILE:LINE: Category: message", whose file and
-    line are seahough's or nobody's)."""
-    click.echo(f"{PROG}: warning: {' '.join(str(message).split())}", err=True)
+    """A warning about an input on the command line: one line, ``seahough:
+    warning: ...`` (not the Python form, "FILE:LINE: Category: message",
+    whose file and line are the command's own); others as Python shows them."""
+    from ..errors import BitDepthWarning, LevelsWarning
+
+    if issubclass(category, (BitDepthWarning, LevelsWarning)):
+        click.echo(f"{PROG}: warning: {' '.join(str(message).split())}", err=True)
+    else:
+        _PYTHON_SHOWWARNING(message, category, filename, lineno, file, line)
+
+
+_PYTHON_SHOWWARNING = warnings.showwarning
 
 
 def _run(argv) -> int:

@@ -305,7 +305,9 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, draw=None, b
               help="At most this many detections per image. A detection's confidence is "
               "measured against the best candidate left out: with more objects in view than "
               "this, the ones reported are measured against the others and may come out "
-              "ambiguous (ask for as many as there may be).")
+              "ambiguous (ask for as many as there may be; to count many objects, e.g. 60 "
+              "tags, ask for a few more than there may be: over 5, each result gets its own "
+              "240 key points, unless --keypoints is given).")
 @click.option("--min-score", type=click.FloatRange(0.0, 1.0), default=_DET["min_score"],
               show_default=True,
               help="Least share of the pattern's edges that must be found.")
@@ -321,7 +323,8 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, draw=None, b
 @click.option("--keypoints", type=click.IntRange(min=1), default=None,
               help=f"Number of most contrasted edge points kept (default {_CFG.n_keypoints}; "
               "without it, a pattern cut from a photo that is a small share of the image, a "
-              "seabed patch, gets as many more as put enough on its area: slower).")
+              "seabed patch, gets as many more as put enough on its area, and a search for "
+              "more than 5 results 240 for each: slower).")
 @click.option("--equalize", is_flag=True, help="Local contrast equalisation (haze, uneven light).")
 @click.option("--smooth", type=click.FloatRange(0.0, 100.0), default=None, metavar="SIGMA",
               help="Blur each image by this Gaussian sigma (px) before its edges are found: "
@@ -409,7 +412,10 @@ def detect(pattern, images, scale_range, angle_range, max_results, min_score, mi
     the same ("" when the search ran). When nothing is reported, the best
     candidate that was not is printed below, with why (e.g. "score 0.34
     under min_score 0.5", "NFA 3.2 over max_nfa 1"): the setting it would
-    take (JSON "best_declined"; -q leaves it out of the table). "nfa" is
+    take (JSON "best_declined"; -q leaves it out of the table). When
+    --max-results cut the list (candidates over --min-score left out: more
+    objects may be there), a line under the table says how many (JSON
+    "left_out"). "nfa" is
     a detection's number of false alarms: how many detections this good
     chance alone would give in an image without the object (1e-5: one in
     100,000 such images); only those of at most --max-nfa are reported. A
@@ -530,7 +536,7 @@ def _report(outcomes, bar, say, form: str, quiet: bool) -> tuple[int, int]:
                    "note": res.note, "detections": [d.to_dict() for d in dets],
                    "best_declined": None if dets else _best_declined_dict(best_declined(res)),
                    "captions": _captions(res), "ignored": _ignored(res),
-                   "time_ms": round(ms, 3)}
+                   "left_out": getattr(res, "left_out", 0), "time_ms": round(ms, 3)}
             if getattr(res, "parts", None):       # (a curve search's result has none)
                 rec["not_found"] = patterns_not_found(res)
             if split_video_ref(name) is not None:
@@ -545,6 +551,10 @@ def _report(outcomes, bar, say, form: str, quiet: bool) -> tuple[int, int]:
                 say(f"{printable(name)}  {w}x{h}  {len(dets)} found  ({ms:.0f} ms)")
                 for line in _detection_lines(dets):
                     say(line)
+                more = getattr(res, "left_out", 0)     # (a curve search's result has none)
+                if more and not quiet:
+                    say(f"  {more} more candidate{'s' if more > 1 else ''} over --min-score "
+                        "left out by --max-results (-n): more objects may be there")
                 missing = patterns_not_found(res)
                 if missing:     # (several patterns: those that found nothing, and why)
                     say(printable("  not found: " + ", ".join(missing)))

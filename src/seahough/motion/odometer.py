@@ -30,7 +30,7 @@ from .._validate import number, pair
 from ..config import ODOMETRY_CONFIG, Config, OdometryTuning
 from ..core.accumulator import check_ranges
 from ..core.detector import MIN_SEGMENTS
-from ..errors import ParameterError
+from ..errors import ParameterError, interrupted
 from ..geometry import apply_matrix, compose, invert_matrix, matrix_power, nearest_similarity
 from ..io.frames import FrameReader
 from .framing import content_box
@@ -47,6 +47,11 @@ __all__ = ["Odometer"]
 TUNING = OdometryTuning()
 
 _IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+#: After a gap of at most this many frames since the last measured one (one
+#: or two frames assumed), that frame gets a full search of its own
+#: (``recover``); a longer gap costs every frame of it the searches it has
+#: (about 0.2 s more a frame at 320x240 when every frame got it).
+RECOVER_SPAN = 3
 
 
 class Odometer:
@@ -140,19 +145,25 @@ class Odometer:
         i = self._next
         t0 = _time.perf_counter()
         cfg = self.config
+        reader = FrameReader([frame], cfg.max_pixels, cfg.max_memory_mb)
         if frame is None:
             prep = Prepared(i, "", error="no frame (None: a dropped frame)")
-            label = f"frame_{i:05d}"
         else:
-            reader = FrameReader([frame], cfg.max_pixels, cfg.max_memory_mb)
             prep = read_frame(reader, 0, cfg.max_pixels, cfg.max_memory_mb, cfg.bit_depth)
             prep.index = i
-            label = f"frame_{i:05d}" if reader.is_array(0) else reader.name(0)
+        label = f"frame_{i:05d}" if reader.is_array(0) else reader.name(0)
         if time is not None:
             time = number("time", time)
-        elif self.fps is not None:
-            time = i / self.fps
-        row = self.step(i, prep, label if name is None else str(name), time, t0)
+        else:   # (as run_odometry: a time in the file's name, else index / fps)
+            time = reader.time(0)
+            if time is None and self.fps is not None:
+                time = i / self.fps
+        try:
+            row = self.step(i, prep, label if name is None else str(name), time, t0)
+        except SystemError as e:   # (Ctrl-C inside a compiled kernel)
+            if interrupted(e):
+                raise KeyboardInterrupt from e
+            raise
         self._next += 1
         return {k: _plain(row.get(k)) for k in self.columns}
 
@@ -247,13 +258,13 @@ def _measure_frame(row, i, gray, feats, st: State, searcher: _Searcher, load):
         base = compose(st.meas_cum, invert_matrix(st.key_cum))
         res, why = searcher.measure(key, gray, feats, None, base, n, "full", ref_rate)
         reasons.append(why)
-    if res is None and st.prev != st.meas and st.meas != st.key:
-        # after a gap (the last frames' poses assumed: a bad frame, a fish), the
+    if res is None and st.prev != st.meas and st.meas != st.key and n <= RECOVER_SPAN:
+        # after a short gap (the last poses assumed: a bad frame, a fish), the
         # last measured frame's full search too, as estimate_motion measures a
         # pair: nearer than the keyframe, and the wide try against it searches
         # for twice the motion (a good frame after one bad frame was flagged
         # no_match: its keyframe 5 frames back, the wide try too wide to vote)
-        res, why = searcher.measure(load(st.meas), gray, feats, None, _IDENTITY, n, "full",
+        res, why = searcher.measure(load(st.meas), gray, feats, None, _IDENTITY, n, "recover",
                                     ref_rate)
         reasons.append(why)
     if res is None and st.prev is not None and st.prev != st.key:

@@ -162,9 +162,9 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
        the window.
     2. ``full``: against the keyframe, with the whole ``scale_range`` /
        ``angle_range`` around the last measured motion and +-half a frame.
-       After a gap (the frames since the last measured one were assumed: a
-       bad frame, a fish), then against that last measured frame too, as
-       :func:`~seahough.estimate_motion` measures a pair.
+    2b. ``recover``: after a gap of one or two frames whose poses were
+       assumed (a bad frame, a fish), against the last measured frame, with
+       the ranges widened over the gap.
     3. ``previous``: against the previous readable frame (when it is not
        the keyframe), full search; it then becomes the keyframe.
     4. ``wide``: the last try before the pair is flagged: against the last
@@ -174,9 +174,9 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
        then becomes the keyframe. A sudden jump, turn or change of altitude
        beyond the per-frame ranges is measured here, not flagged.
 
-    A search of a frame directly, without a prior and not through a
-    keyframe (the first pair, 2. while the keyframe is the previous frame or
-    after a gap, 3., 4.) is measured as
+    A search of a frame one or two frames away, directly, without a prior and
+    not through a keyframe (the first pair, 2. while the keyframe is the
+    previous frame, 2b. after one frame assumed, 3., 4.) is measured as
     :func:`~seahough.estimate_motion` measures a pair: coarse to fine and a
     check of the candidates as homographies when the vote cannot vouch for
     its answer (a repeated texture, a camera that looks ahead), so that its
@@ -249,9 +249,9 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
         try:
             return _run(run, reader, items, odo, resume, progress, mosaic, t_start,
                         (metres_per_pixel, altitude, focal_px, _source(frames)), workers)
-        except SystemError as e:   # (Ctrl-C inside a compiled kernel of a prefetching thread)
+        except SystemError as e:   # (Ctrl-C inside a compiled kernel)
             if interrupted(e):
-                raise KeyboardInterrupt from None
+                raise KeyboardInterrupt from e
             raise
         finally:
             reader.close()

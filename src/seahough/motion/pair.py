@@ -500,6 +500,8 @@ def _pattern_motion(pattern: Pattern, current, scale_range, angle_range, *, max_
                     features: Features | None = None, homography: bool = False) -> MotionResult:
     """:func:`motion_from_pattern`'s :class:`MotionResult`."""
     cfg = MOTION_CONFIG if config is None else config
+    if not isinstance(cfg, Config):
+        raise ParameterError("config must be a seahough.Config")
     _check_thresholds(max_shift, min_confidence, min_score)
     max_nfa = check_max_nfa(max_nfa)
     cur = to_gray(current, name="current frame", max_pixels=cfg.max_pixels,

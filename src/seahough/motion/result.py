@@ -94,7 +94,8 @@ class Motion(ValueEquality):
                 "nfa": float(self.nfa) if math.isfinite(self.nfa) else None,
                 "parallax": float(self.parallax) if math.isfinite(self.parallax) else None,
                 "homography": (None if self.homography is None
-                               else np.asarray(self.homography).tolist())}
+                               else np.asarray(self.homography).tolist()),
+                "note": self.note}
 
 
 @dataclass(eq=False)

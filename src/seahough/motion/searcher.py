@@ -183,15 +183,17 @@ class Searcher:
             span = min(n, t.max_span) * widen
             mx, my = t.full_shift * w * span, t.full_shift * h * span
             region = (bx - mx, by - my, bx + mx, by + my)
-        # a frame searched directly without a prior, not through a keyframe
-        # (the first pair, the previous frame's try, the last measured frame's
-        # after a gap, the wide try; a frame or two apart): measured as
+        # a frame a frame or two apart searched directly, without a prior and
+        # not through a keyframe (the first pair, the previous frame's try, the
+        # last measured frame's after a one-frame gap, a wide try so near;
+        # farther, the slow route costs each frame of a long gap): measured as
         # estimate_motion does, coarse to fine and the check of the candidates
         # when the vote cannot vouch for its answer. Over 40 rendered tiled floors
         # seen by a forward-oblique camera (bench/bench_oblique.py's dev part,
         # 10-frame runs) pairs measured 182 -> 354 of 360, steps within 2 % of the
         # diagonal 103 -> 322, off by more than 3 % 26 -> 20
-        adjacent = predicted is None and base is not None and np.allclose(base, _SAME)
+        adjacent = (predicted is None and n <= 2 and base is not None
+                    and np.allclose(base, _SAME))
         try:
             d = self._run(pattern, gray, feats, sr, ar, region,
                           self.prior_cfg if predicted is not None else self.cfg,

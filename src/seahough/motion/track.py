@@ -49,7 +49,7 @@ class OdometryResult:
         displayed, size change),
         ``score, overlap`` (of the measurement), ``ref`` (index of the frame
         it was measured against), ``method`` (``"prior"``, ``"full"``,
-        ``"previous"``, ``"wide"``: see :func:`run_odometry`'s notes), ``status``
+        ``"recover"``, ``"previous"``, ``"wide"``: see :func:`run_odometry`'s notes), ``status``
         (``"origin"``, ``"measured"``, ``"assumed"``: a pose carried on from
         the last measured one, see the ``flags``; ``"unreadable"``),
         ``ms``, ``matrix`` and
