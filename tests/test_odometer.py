@@ -5,6 +5,7 @@ after a bad one."""
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
@@ -206,3 +207,52 @@ def test_measure_motion_says_why_there_is_no_motion(caplog):
     r = seahough.measure_motion(*framed, min_confidence=1.0)
     np.testing.assert_allclose(r.best.matrix, shift_origin(declined.best.matrix, -20, -12),
                                atol=0.5)
+
+
+def test_pushes_from_two_threads_are_taken_in_turn_and_the_frame_is_copied():
+    """A user's trial: two threads pushing into one Odometer broke it
+    ("'NoneType' object is not callable", two rows of index 1); and a
+    float32 frame whose pixels were all kept (no border cropped) stayed the
+    caller's buffer, which a camera driver refills: the keyframe changed
+    under the Odometer (dy 0.0 where copies gave 10.7)."""
+    import threading
+
+    frames, _ = _line(9)
+    odo = seahough.Odometer()
+    rows, errors = [], []
+    lock = threading.Lock()
+    todo = list(frames)
+
+    def worker():
+        while True:
+            with lock:
+                if not todo:
+                    return
+                f = todo.pop(0)
+            try:
+                rows.append(odo.push(f))
+            except Exception as e:     # pragma: no cover - the failure this test catches
+                errors.append(e)
+    threads = [threading.Thread(target=worker) for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors and sorted(r["index"] for r in rows) == list(range(9))
+    # a refilled buffer
+    # (66 px strips: frames so small keep every pixel, no border cropped, no copy made)
+    grey = [np.ascontiguousarray(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY)[80:146]).astype(np.float32)
+            for f in frames[:4]]
+    copies = [seahough.Odometer().push(g) for g in grey[:1]]
+    ref = seahough.Odometer()
+    want = [ref.push(g.copy()) for g in grey]
+    buf = np.empty_like(grey[0])
+    odo = seahough.Odometer()
+    got = []
+    for g in grey:
+        buf[...] = g
+        got.append(odo.push(buf))
+    assert copies[0]["status"] == "origin"
+    assert [r["dy"] for r in got[1:]] == pytest.approx([r["dy"] for r in want[1:]], abs=1e-6)
+    with pytest.raises(seahough.ImageValueError, match="frame: expected a numpy array"):
+        odo.push([[1, 2], [3, 4]])

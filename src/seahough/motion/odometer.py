@@ -22,6 +22,8 @@ so the two give the same rows for the same frames.
 
 from __future__ import annotations
 
+import os
+import threading
 import time as _time
 
 import numpy as np
@@ -30,7 +32,7 @@ from .._validate import number, pair
 from ..config import ODOMETRY_CONFIG, Config, OdometryTuning
 from ..core.accumulator import check_ranges
 from ..core.detector import MIN_SEGMENTS
-from ..errors import ParameterError, interrupted
+from ..errors import ImageValueError, ParameterError, interrupted
 from ..geometry import apply_matrix, compose, invert_matrix, matrix_power, nearest_similarity
 from ..io.frames import FrameReader
 from .framing import content_box
@@ -109,16 +111,18 @@ class Odometer:
         #: how a frame the state needs and does not hold is read again (a
         #: resumed run's keyframe): index -> grey image
         self.fetch = None
+        self._lock = threading.Lock()
         self.reset()
 
     def reset(self) -> None:
         """Start a new track: the next frame is frame 0 of it (after a change
         of camera, of resolution, or a jump to another place)."""
-        self.st = State()
-        self.searcher: _Searcher | None = None
-        self.frames: dict = {}    # index -> Frame: those the next one may be measured against
-        self.hashes: dict = {}    # index -> frame_hash of those
-        self._next = 0
+        with self._lock:
+            self.st = State()
+            self.searcher: _Searcher | None = None
+            self.frames: dict = {}   # index -> Frame: those the next one may be measured against
+            self.hashes: dict = {}   # index -> frame_hash of those
+            self._next = 0
 
     def push(self, frame, *, time: float | None = None, name: str | None = None) -> dict:
         """Measure the next frame; returns its row.
@@ -136,12 +140,35 @@ class Odometer:
         Returns
         -------
         dict
-            The columns of :attr:`OdometryResult.rows <seahough.motion.track.OdometryResult>`
-            (``index, time, x, y, heading, scale, confidence, nfa, flags, dx, dy,
-            rotation, scale_change, ..., status, ms, matrix, pair_matrix``),
-            unrounded; ``status`` ``"origin"``, ``"measured"``, ``"assumed"``
-            (see the ``flags``) or ``"unreadable"``.
+            The columns of :attr:`OdometryResult.rows <seahough.motion.track.OdometryResult>`,
+            unrounded: ``index, file, time``; the pose ``x, y, heading, scale``
+            (``x_m, y_m`` with a ground size), ``matrix`` (frame 0 -> this
+            frame, 6 numbers, row-major 2x3); its evidence ``confidence,
+            nfa, score, overlap``; ``flags`` ("" when the step was measured;
+            the first word says why not: ``no_match``, ``low_confidence``,
+            ``little_overlap``, ``few_edges``, ``duplicate``, ``unreadable``;
+            ``after_gap`` on a measured step); the step from the previous
+            frame ``dx, dy, rotation, scale_change, pair_matrix``; how it
+            was measured ``ref, method, ms``; ``status``: ``"origin"``,
+            ``"measured"``, ``"assumed"`` (a pose carried on: not measured)
+            or ``"unreadable"`` (no pose); ``frame_hash, settings_hash``
+            (what a resumed file run checks).
+
+        Raises
+        ------
+        ImageValueError
+            ``frame`` is neither an array, a path nor None.
+
+        One push at a time: pushes from several threads are taken in turn
+        (a lock), in the order they get it.
         """
+        if frame is not None and not isinstance(frame, (np.ndarray, str, os.PathLike)):
+            raise ImageValueError(f"frame: expected a numpy array, a file path or None, got "
+                                  f"{type(frame).__name__}")
+        with self._lock:
+            return self._push(frame, time, name)
+
+    def _push(self, frame, time, name) -> dict:
         i = self._next
         t0 = _time.perf_counter()
         cfg = self.config
@@ -151,6 +178,10 @@ class Odometer:
         else:
             prep = read_frame(reader, 0, cfg.max_pixels, cfg.max_memory_mb, cfg.bit_depth)
             prep.index = i
+            if prep.gray is not None and isinstance(frame, np.ndarray) \
+                    and np.may_share_memory(prep.gray, frame):
+                # (a camera driver refills its buffer: the keyframe must be our own)
+                prep.gray = prep.gray.copy()
         label = f"frame_{i:05d}" if reader.is_array(0) else reader.name(0)
         if time is not None:
             time = number("time", time)

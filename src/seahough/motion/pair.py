@@ -151,7 +151,10 @@ def measure_motion(previous, current, scale_range=(0.8, 1.25), angle_range=(-30.
     """:func:`estimate_motion`, with why it gave no motion: a
     :class:`~seahough.motion.MotionResult` (``motion``: the answer or None;
     ``reason``: why None, "" when answered; ``best``: the best motion found,
-    also when declined). The parameters are :func:`estimate_motion`'s.
+    also when declined). The parameters are :func:`estimate_motion`'s. The
+    thresholds also steer the measurement: a pair whose similarity is less
+    confident than ``min_confidence`` is measured again tile by tile, so
+    ``best``'s figures may differ a little between two thresholds.
 
     Examples
     --------
