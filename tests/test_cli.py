@@ -357,7 +357,8 @@ def test_the_accumulator_picture_of_several_patterns_shows_each_pattern(tmp_path
     assert [d.pattern for d in res.detections] == ["rope"]
     seen = []
     draw = viz.plot_accumulator
-    monkeypatch.setattr(viz, "plot_accumulator", lambda planes, dets, path, title, note:
+    monkeypatch.setattr(viz, "plot_accumulator",
+                        lambda planes, dets, path, title, note, patterns=None:
                         seen.append((planes, title)) or draw(planes, dets, path, title=title,
                                                             note=note))
     written = {}
@@ -1211,3 +1212,36 @@ def test_the_edges_picture_says_when_the_edges_came_from_colour(tmp_path, monkey
     capsys.readouterr()
     assert titles[0].endswith("(edges from the colour channels; left, its grey levels)")
     assert titles[1] == "grey.png: what the detector sees"
+
+
+def test_an_overlay_says_what_was_not_found_and_keeps_each_patterns_colour(tmp_path,
+                                                                         monkeypatch):
+    """A trial of the pictures: a not-found overlay said only "not found" (the
+    table gave the best candidate and why); a multi-pattern overlay never named
+    the patterns that found nothing; and a pattern's colour changed with the
+    image (by rank when only one pattern was found in it: now by the search's
+    pattern order, given to the picture)."""
+    import seahough.viz as viz
+    from seahough.cli import main
+
+    img = np.full((240, 320), 60, np.uint8)
+    cv2.circle(img, (100, 120), 20, 200, -1)
+    cv2.circle(img, (220, 120), 20, 200, -1)
+    p = tmp_path / "two.png"
+    cv2.imwrite(str(p), img)
+    seen = {}
+    monkeypatch.setattr(viz, "plot_detections",
+                        lambda image, dets, path, **kw: seen.setdefault(Path(path).parent.name, kw))
+    for spec, out, more in (("buoy=circle:20+post=line:100,12", "a", []),
+                            ("rect:60,60", "b", ["--min-score", "0.95"])):
+        with pytest.raises(SystemExit):
+            main(["detect", spec, str(p), "-q", "--pictures", "overlay",
+                  "--out", str(tmp_path / out)] + more)
+    assert seen["a"]["title"] == "two.png: 2 detections; not found: post", seen["a"]
+    assert seen["a"]["patterns"] == ["buoy", "post"]
+    assert seen["b"]["title"].startswith("two.png: not found; best candidate: score ")
+    assert seen["b"]["patterns"] is None
+    from seahough.viz.detections import colours
+    from types import SimpleNamespace as Det
+    assert colours([Det(pattern="post")], ["buoy", "post"]) == colours(
+        [Det(pattern="buoy"), Det(pattern="post")])[1:]

@@ -152,6 +152,12 @@ def test_plot_trajectory_draws_a_runs_metres_in_the_unit_asked_for(tmp_path):
                                                          for r in rows]), unit="m")
     rows[2].update(x=900.0, x_m=2.25, status="assumed", flags=["pose_assumed"])
     assert "300.0 px measured" in title(plot.plot_trajectory(rows))   # (1500 counted)
+    # the rows of a pixel run's CSV (read_odometry_csv: no x_m, a settings hash) are
+    # pixels too: refused in metres (a trial drew "171.6 m measured" from pixels)
+    csv_rows = [{k: v for k, v in r.items() if k not in ("x_m", "y_m")}
+                | {"settings_hash": "abc"} for r in rows]
+    with pytest.raises(seahough.ParameterError, match="unit='m': this run has no metric"):
+        plot.plot_trajectory(csv_rows, unit="m")
 
 
 def test_save_mosaic(tmp_path):

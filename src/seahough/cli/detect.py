@@ -192,10 +192,19 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, draw: Dr
     why = f" ({res.note})" if res.note else ""
     head = f"{Path(name).name}: " + (f"not found{why}" if n == 0 else
                                      f"{n} detection{'s' if n > 1 else ''}")
+    missing = patterns_not_found(res)
+    if n and missing:    # (several patterns: say which found nothing, as the table does)
+        head += f"; not found: {', '.join(missing)}"
+    near = best_declined(res) if n == 0 and not res.note else None
+    if near is not None:  # (what came closest, and why it was not reported)
+        head += f"; best candidate: score {near.score:.2f}, {near.declined}"
+    names = list(getattr(detector, "parts", None) or {}) or None
     ov = Path(f"{base}_overlay.png")
     if isinstance(detector, CurveSearch):    # curves: the overlay only
         head = f"{Path(name).name}: " + (f"{n} curve{'s' if n > 1 else ''}" if n
                                          else "no curve found")
+        if near is not None:
+            head += f"; best line: score {near.score:.2f}, {near.declined}"
         if "overlay" in kinds:
             plot.plot_curves(img, dets, ov, title=head, max_width=max_width,
                              bit_depth=detector.config.bit_depth)
@@ -203,7 +212,8 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, draw: Dr
         return
     if "overlay" in kinds:
         plot.plot_detections(img, dets, ov, pattern=pat, title=head, max_width=max_width,
-                             bit_depth=detector.config.bit_depth, blanks=res.blanks)
+                             bit_depth=detector.config.bit_depth, blanks=res.blanks,
+                             patterns=names)
         written["overlay"] = str(ov)
     feats = res.features
     acc_title = f"{Path(name).name}: accumulator"
@@ -226,7 +236,8 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, draw: Dr
             from ..viz._figure import stack_figures
 
             stack_figures([plot.plot_accumulator(r.planes, dets, None, note=r.note,
-                                                 title=f"{acc_title} of pattern {n}")
+                                                 title=f"{acc_title} of pattern {n}",
+                                                 patterns=names)
                            for n, r in res.parts.items()], ac)
         else:
             plot.plot_accumulator(res.planes, dets, ac, title=acc_title, note=res.note)

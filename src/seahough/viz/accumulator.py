@@ -149,7 +149,8 @@ def _place_peak_labels(ax, marks, ring_px=22):
     return out
 
 
-def plot_accumulator(planes, detections=(), path=None, *, title=None, note=None) -> Figure:
+def plot_accumulator(planes, detections=(), path=None, *, title=None, note=None,
+                     patterns=None) -> Figure:
     """The accumulator's two planes, as in the paper's Fig. 4.
 
     Left, *where*: the dx-dy plane (``planes.xy``): for each position of the
@@ -259,7 +260,7 @@ def plot_accumulator(planes, detections=(), path=None, *, title=None, note=None)
         ax2.set_title(f"{name} - " + ax2.get_title(), fontsize=11)
     shown = [(i, d) for i, d in enumerate(detections)
              if not name or getattr(d, "pattern", name) == name]
-    tint = colours(list(detections))   # (as the overlay: by pattern when several)
+    tint = colours(list(detections), patterns)   # (as the overlay: by pattern when several)
     for i, d in shown:
         c = tint[i]
         a, sc = scale_angle_marker(planes, d.scale, d.angle)

@@ -391,16 +391,22 @@ def _notes_below(fig, items, pattern, top_left, width, nf_size):
         _pattern_beside(fig, pattern, x, y, side if pw >= ph else side * pw / ph)
 
 
-def colours(detections) -> list:
-    """Each detection's colour: by its pattern's when they name several
-    (in the order the patterns first appear), else by its rank.
+def colours(detections, patterns=None) -> list:
+    """Each detection's colour: by its pattern's when they name several (in
+    the order the patterns first appear), or when ``patterns`` (the names of
+    a search's patterns) gives the order: the same colour for a pattern in
+    every image, even one where it alone was found; else by its rank.
 
     >>> from types import SimpleNamespace as D
     >>> colours([D(pattern="gate"), D(pattern="buoy"), D(pattern="gate")]) == [
     ...     COLOURS[0], COLOURS[1], COLOURS[0]]
     True
+    >>> colours([D(pattern="buoy"), D(pattern="buoy")], ["gate", "buoy"]) == [COLOURS[1]] * 2
+    True
     """
-    names = list(dict.fromkeys(getattr(d, "pattern", "") for d in detections))
+    names = list(patterns or ())
+    names += [n for n in dict.fromkeys(getattr(d, "pattern", "") for d in detections)
+              if n not in names]
     if len(names) > 1:
         return [COLOURS[names.index(getattr(d, "pattern", "")) % len(COLOURS)]
                 for d in detections]
@@ -453,7 +459,7 @@ def _draw_blank(ax, box, side: str, text: str) -> None:
 
 
 def plot_detections(image, detections, path=None, *, pattern=None, title=None,
-                    max_width=None, bit_depth=None, blanks=None) -> Figure:
+                    max_width=None, bit_depth=None, blanks=None, patterns=None) -> Figure:
     """The image with each detection's outline, origin and numbers.
 
     Parameters
@@ -502,6 +508,9 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
         each burned-in caption's box and each region of ``Config.ignore``
         is drawn dashed, marked "caption, not searched" or "ignored, not
         searched" (an object under it could not be found).
+    patterns : list of str, optional
+        The names of a search's patterns (``list(detector.parts)``): each
+        pattern's colour then stays the same in every image.
 
     Returns
     -------
@@ -540,7 +549,7 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
     for box, side, text in left_out:
         _draw_blank(ax, box, side, text)     # (and kept free of the labels, as an object is)
         anchors.append(np.array([box[:2], box[2:]], float))
-    for i, (d, c) in enumerate(zip(detections, colours(detections))):
+    for i, (d, c) in enumerate(zip(detections, colours(detections, patterns))):
         is_line = d.kind == "line"
         seg = None
         if is_line and d.line_angle is not None:
@@ -573,7 +582,7 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
     corners = _free_corners(np.vstack(anchors) if anchors else np.empty((0, 2)), w, h)
     n = len(detections)
     items = [((f"#{i + 1} " if n > 1 else "") + _det_label(d), c)
-             for i, (d, c) in enumerate(zip(detections, colours(detections)))]
+             for i, (d, c) in enumerate(zip(detections, colours(detections, patterns)))]
     _notes(fig, ax, items, pattern, corners, (w, h), (iw, ih))
     if title is None:
         n = len(detections)

@@ -52,7 +52,9 @@ def _positions(rows, unit: str, is_result: bool):
     for a metric unit when the rows have them."""
     per = _PER_METRE.get(unit)
     metric = per is not None and any(r.get("x_m") is not None for r in rows)
-    if per is not None and not metric and is_result and rows:
+    # (rows of a run's CSV, read_odometry_csv's, carry its settings hash: in px)
+    from_run = is_result or any("settings_hash" in r for r in rows)
+    if per is not None and not metric and from_run and rows:
         from ..errors import ParameterError
         raise ParameterError(f"unit={unit!r}: this run has no metric positions (x_m, y_m); "
                              "give run_odometry metres_per_pixel, or altitude and focal_px, "
@@ -79,7 +81,8 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
         with ``x_m``, ``y_m`` (a metric run: ``run_odometry`` with metres per
         pixel, or altitude and focal length) are drawn from those, in that
         unit; rows without them are taken as already in it (a run without
-        them: ParameterError). Any other unit labels ``x``, ``y`` as given.
+        them, or its CSV's rows: ParameterError). Any other unit labels
+        ``x``, ``y`` as given.
     truth : (N, 2) array, optional
         The true positions: a wide light grey band with a ring at each
         position, under the estimate (the estimate shows inside the band
