@@ -358,7 +358,7 @@ def test_the_accumulator_picture_of_several_patterns_shows_each_pattern(tmp_path
     seen = []
     draw = viz.plot_accumulator
     monkeypatch.setattr(viz, "plot_accumulator",
-                        lambda planes, dets, path, title, note, patterns=None:
+                        lambda planes, dets, path, title, note, patterns=None, best=None:
                         seen.append((planes, title)) or draw(planes, dets, path, title=title,
                                                             note=note))
     written = {}

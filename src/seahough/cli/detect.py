@@ -237,10 +237,11 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, draw: Dr
 
             stack_figures([plot.plot_accumulator(r.planes, dets, None, note=r.note,
                                                  title=f"{acc_title} of pattern {n}",
-                                                 patterns=names)
+                                                 patterns=names, best=best_declined(r))
                            for n, r in res.parts.items()], ac)
         else:
-            plot.plot_accumulator(res.planes, dets, ac, title=acc_title, note=res.note)
+            plot.plot_accumulator(res.planes, dets, ac, title=acc_title, note=res.note,
+                                  best=near)
         written["accumulator"] = str(ac)
     if "edges" in kinds:
         ed = Path(f"{base}_edges.png")

@@ -150,7 +150,7 @@ def _place_peak_labels(ax, marks, ring_px=22):
 
 
 def plot_accumulator(planes, detections=(), path=None, *, title=None, note=None,
-                     patterns=None) -> Figure:
+                     patterns=None, best=None) -> Figure:
     """The accumulator's two planes, as in the paper's Fig. 4.
 
     Left, *where*: the dx-dy plane (``planes.xy``): for each position of the
@@ -184,6 +184,11 @@ def plot_accumulator(planes, detections=(), path=None, *, title=None, note=None,
         Where to save the PNG.
     title : str, optional
         A line above both panels.
+    best : Candidate, optional
+        When nothing was found: the best candidate not reported (its
+        refined pose, which the table gives), ringed and labelled; the
+        highest vote cell, where refinement started, is then "highest
+        vote".
     note : str, optional
         Why there are no planes (``SearchResult.note``), for that note;
         default: the image has no edges.
@@ -272,10 +277,20 @@ def plot_accumulator(planes, detections=(), path=None, *, title=None, note=None,
     if not shown and xy.size and xy.max() > 0:
         r, c = np.unravel_index(int(np.argmax(xy)), xy.shape)
         ax1.plot([planes.x[c]], [planes.y[r]], "x", ms=14, mew=2.5, color="white")
-        ax1.annotate("highest peak (rejected)", (planes.x[c], planes.y[r]), xytext=(10, 8),
+        ax1.annotate("highest vote" if best is not None else "highest peak (rejected)",
+                     (planes.x[c], planes.y[r]), xytext=(10, 8),
                      textcoords="offset points", color="white", fontsize=10,
                      path_effects=_TEXT_OUTLINE)
         k, j = np.unravel_index(int(np.argmax(sa)), sa.shape)
         ax2.plot([ang[j]], [planes.scales[k]], "x", ms=14, mew=2.5, color="white", clip_on=False)
+    if not shown and best is not None:   # (the refined candidate the table reports)
+        q = best.pose
+        a, sc = scale_angle_marker(planes, q.scale, q.angle)
+        for ax, px, py in ((ax1, q.tx, q.ty), (ax2, a, sc)):
+            ax.plot([px], [py], "o", ms=18, mfc="none", mec="white", mew=1.8, ls="none",
+                    clip_on=False)
+            ax.annotate("best candidate (declined)", (px, py), xytext=(10, -14),
+                        textcoords="offset points", color="white", fontsize=10,
+                        path_effects=_TEXT_OUTLINE)
     return _finish(fig, path)
 
