@@ -576,3 +576,20 @@ def test_counting_many_objects_finds_them_and_says_when_the_list_was_cut(tmp_pat
     assert hits_few < hits - 5, (hits_few, hits)
     cut, _, _ = found(Detector(ring, (0.6, 1.6), max_results=10))
     assert len(cut.detections) == 10 and cut.left_out >= 1
+
+
+def test_a_thick_line_in_a_large_photo_is_searched_where_its_band_has_edges():
+    """A trial of the pictures: a 690 x 33 px post in a 4000 x 2250 photo
+    (``line:690,33``) failed, "0 edge segments at scale 0.08": brought to
+    320 px the band was 1.3 px across at the smallest scale searched, its two
+    borders merged. It is searched where the band keeps 3 px."""
+    rng = np.random.default_rng(1)
+    img = cv2.GaussianBlur(rng.normal(90, 12, (2250, 4000)).astype(np.float32), (0, 0), 3)
+    img[700:1500, 1900:1933] += 90           # a post 33 px wide, 800 px long
+    det = seahough.Detector(seahough.Pattern.line(690, 33), max_results=1)
+    res = det.search(np.clip(img, 0, 255).astype(np.uint8))
+    assert res.factor > 0.15 and len(res.detections) == 1, res.factor
+    d = res.detections[0]
+    assert abs(d.line_angle - 90.0) < 2.0 and abs(d.x - 1916) < 4, (d.x, d.line_angle)
+    # a band that keeps its edges at the usual scale is searched there, as before
+    assert seahough.Detector(seahough.Pattern.line(120, 12)).working_factor((480, 640)) == 0.5

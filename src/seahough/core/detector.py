@@ -331,8 +331,8 @@ class Detector:
         fit = 2.0 * math.hypot(*gray.shape[:2]) / p.extent
         s1 = min(s1, max(fit, s0))
         if factor is None:
-            factor = features.gradients.factor if features is not None else choose_factor(
-                gray.shape, cfg, p.extent, s0)
+            factor = (features.gradients.factor if features is not None
+                      else self.working_factor(gray.shape))
         if features is None:
             features = extract_features(gray, factor, self._features_config(),
                                         n_keypoints=self._n_keypoints(gray.shape, factor),
@@ -368,6 +368,23 @@ class Detector:
         timings["total"] = time.perf_counter() - t0
         return SearchResult(dets, planes(votes, bins, features.gradients), features, factor,
                             cands, timings)
+
+    def working_factor(self, shape) -> float:
+        """The downscale factor of a search of an image of ``shape``
+        (:func:`~.preprocess.choose_factor`: the pattern at its smallest
+        scale kept large enough); a line whose band has no edges left at it
+        (its two borders merged: a 690 x 33 px post in a 4000 px photo was an
+        error, "0 edge segments") is searched where its band keeps
+        :data:`~.preprocess.MIN_BAND_PX` across."""
+        p, cfg = self.pattern, self.config
+        f = choose_factor(shape, cfg, p.extent, self.scale_range[0])
+        if p.is_line and cfg.downscale is None:
+            try:
+                p.features(f, cfg)
+            except PatternError:
+                f = max(f, choose_factor(shape, cfg, p.extent, self.scale_range[0],
+                                         band_width=p.line_width))
+        return f
 
     def _edge_gap(self, pf, factor: float) -> float | None:
         """The pattern's :func:`.accumulator.edge_gap` at working scale
@@ -495,7 +512,7 @@ class Detector:
                 shared[None] = features
                 continue
             fcfg = d._features_config()
-            f = choose_factor(gray.shape, cfg, d.pattern.extent, d.scale_range[0])
+            f = d.working_factor(gray.shape)
             key = (f, d._n_keypoints(gray.shape, f), fcfg.chain_length, gray.ndim)
             keys[name] = key
             if key not in shared:

@@ -31,7 +31,6 @@ from .._validate import number
 from ..config import config_record
 from ..core.detector import Detector
 from ..core.pattern import Pattern
-from ..core.preprocess import choose_factor
 from ..errors import ParameterError, SeahoughError, without_name
 from ._cluster import open_client
 from ._inputs import expand_inputs
@@ -146,7 +145,7 @@ def _prepare(detector: Detector, path: str) -> None:
         return
     for d in (detector.parts or {"": detector}).values():
         cfg = d.config    # (each pattern's: its colour is its own)
-        factor = choose_factor((h, w), cfg, d.pattern.extent, d.scale_range[0])
+        factor = d.working_factor((h, w))
         d.pattern.features(factor, cfg)
         d.pattern.finish_points(factor, cfg)
 
