@@ -6,6 +6,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 
 from ..io.images import write_image
@@ -144,7 +145,19 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
         ax.plot([], [], "-o", color=TRUTH_COLOUR, lw=6, ms=9, mfc="none", mec="#5a5a5a",
                 label="truth")
     if ok.any():
-        ax.plot(xs[ok], ys[ok], "-", color="#1f5fbf", lw=2.2, label="dead reckoning")
+        # the steps to or from an assumed pose dashed: not measured (drawn solid,
+        # a run through a bad frame showed a back-and-forth that never happened)
+        idx = np.flatnonzero(ok)
+        steps = {True: [], False: []}
+        for a, b in zip(idx[:-1], idx[1:]):
+            steps[bool(guessed[a] or guessed[b])].append([(xs[a], ys[a]), (xs[b], ys[b])])
+        ax.add_collection(LineCollection(steps[False], colors="#1f5fbf", linewidths=2.2,
+                                         capstyle="round"))
+        ax.plot([], [], "-", color="#1f5fbf", lw=2.2, label="dead reckoning")
+        if steps[True]:
+            ax.add_collection(LineCollection(steps[True], colors="#1f5fbf", linewidths=1.6,
+                                             linestyles=(0, (4, 3))))
+            ax.plot([], [], "--", color="#1f5fbf", lw=1.6, label="to or from an assumed pose")
         ax.plot(xs[ok], ys[ok], ".", color="#1f5fbf", ms=6)
         i0 = int(np.flatnonzero(ok)[0]); i1 = int(np.flatnonzero(ok)[-1])
         # (start and end over the flags' markers: an assumed first or last pose hid them)
@@ -174,6 +187,7 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
     else:
         ax.text(0.5, 0.5, "no positions", transform=ax.transAxes, ha="center", va="center",
                 fontsize=20)
+    ax.margins(0.1)       # (room for the heading arrows at the path's ends)
     ax.set_aspect("equal", adjustable="datalim")
     ax.invert_yaxis()
     ax.grid(True, alpha=0.3)
