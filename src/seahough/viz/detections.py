@@ -474,7 +474,11 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
         segment along the object that the image shows (both borders of the
         band, edges across ``line_angle`` through ``(x, y)``, closed at the
         ends where the visible part stops), or as their two borders across
-        the whole image when that cannot be found. Each gets a label
+        the whole image when that cannot be found; a line's "+" is put on
+        the drawn segment, at the point of the line nearest its ``(x, y)``
+        (a line's position along itself is not measured: its ``x, y`` may
+        lie beyond the visible part, where the accumulator picture rings
+        it). Each gets a label
         ``"score 0.87 · conf 0.64 · s 1.23 · 45.0°"`` (angles in [0, 360),
         lines' in [0, 180), wrapped after rounding): beside a single
         detection, or, for several, in a numbered list in the image corner
