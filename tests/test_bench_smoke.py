@@ -587,3 +587,18 @@ def test_speckle_benchmark_quick(tmp_path):
         assert all(0.0 <= float(c.split()[0]) <= 5.0 for c in r[3:7]), r
     line = rows[0]
     assert "(over)" in line[4] and float(line[7]) < 1e-2, line   # chance lines under 0.1
+
+
+def test_counting_benchmark_quick(tmp_path):
+    """bench/bench_counting.py --quick: both parts, both ways, counts that add up."""
+    if shared_data_dir() is None:
+        pytest.skip("real data (../shared/data) is not present beside this checkout")
+    text = _quick_page(ROOT / "bench" / "bench_counting.py", tmp_path / "counting.md")
+    assert "Machine:" in text and "## tune part" in text and "## test part" in text
+    for part in ("tune", "test"):
+        rows = _rows(_section(text, f"## {part} part"))[1:]
+        totals = [r for r in rows if r[1] == "all"]
+        assert len(totals) == 2, rows
+        for r in totals:    # one photo, 20 rings and 20 squares
+            found = re.match(r"\d+ % \((\d+)/(\d+)\)", r[2])
+            assert int(found.group(2)) == 40 and int(found.group(1)) <= 40, r

@@ -55,10 +55,10 @@ MIN_ON_PATTERN = 16
 #: photo's texture holds most of the strongest edges, and with 1,200 the
 #: fainter ones of 20-60 rings or squares drawn on it had none (a scientist
 #: counting tags: 31 of 60 found, each reported at confidence 1, no flag).
-#: Chosen on rings and squares drawn on two seabed photos (tune part: dtu,
-#: sparus; 5-60 of them, max_results N + 10): recall 46 -> 95 %, no false
-#: detection either way, 1.7x the time; 120 each: 93 %. On three other
-#: photos (test part: skerki, the wreck, the starfish): 49 -> 92 %.
+#: Chosen on rings and squares drawn on two seabed photos (bench/bench_counting.py,
+#: tune part: 5-60 of them, max_results N + 10): recall 43 -> 92 %, no false
+#: detection either way, 1.7x the time (120 each: a little less); on three
+#: other photos (its test part) 44 -> 88 % (docs/counting.md).
 KEYPOINTS_PER_RESULT = 240
 #: Why a search ended early with no detections ("" when it ran to the end).
 SEARCH_NOTES = ("", "no edges", "pattern larger than the image",
