@@ -69,7 +69,10 @@ class Odometer:
     ----------
     scale_range, angle_range : (float, float)
         Size change and turn (degrees) possible between consecutive
-        frames, as for :func:`~seahough.run_odometry`.
+        frames, as for :func:`~seahough.run_odometry` (narrower than
+        :func:`~seahough.estimate_motion`'s, which are for any pair: a
+        stream's consecutive frames differ by little, and a larger jump is
+        still measured by the run's wide try).
     metres_per_pixel, altitude, focal_px : float, optional
         The ground size of a frame-0 pixel, or the altitude (m) and focal
         length (px) of a down-looking camera: adds ``x_m, y_m`` to the rows.
