@@ -131,8 +131,9 @@ class _Terminated(BaseException):
     that click does not take it for a Ctrl-C at a prompt)."""
 
 
-_TERM_MESSAGE = ("terminated (SIGTERM); what was done is kept (a survey goes on where it "
-                 "stopped when run again; seahough odometry: run it again with --resume)")
+_TERM_MESSAGE = ("terminated (SIGTERM); what was done is kept (seahough survey: the same "
+                 "command goes on where it stopped; seahough odometry: the same command "
+                 "with --resume)")
 
 
 #: A second interruption within this many seconds of the first is the same

@@ -75,6 +75,13 @@ def _kept(out) -> str:
             "command goes on with the others")
 
 
+def _chunks_kept(out) -> str:
+    """What an interrupted survey odometry in ``out`` kept, in words."""
+    done = len(list((Path(out) / "chunks").glob("*/summary.json")))
+    return (f"{done} chunk{'s' if done != 1 else ''} of frames measured and kept in "
+            f"{printable(out)}; the same command goes on with the others")
+
+
 def _errors(images_path: Path, limit: int) -> list[tuple[str, str]]:
     """The first ``limit`` error rows of images.parquet: (path, error)."""
     import pyarrow.parquet as pq
@@ -260,11 +267,18 @@ def odometry(frames, out, workers, scheduler, chunk_size, as_json, quiet, **opts
     # looked up when the command runs (tests stand a stub in for it)
     run = importlib.import_module("seahough.survey.odometry").odometry
     t0 = time.perf_counter()
-    paths = run(list(frames), out, workers=workers, scheduler=scheduler, chunk_size=chunk_size,
-                metres_per_pixel=mpp, altitude=altitude, focal_px=focal_px,
-                scale_range=opts["scale_range"], angle_range=opts["angle_range"],
-                mosaic=not opts["no_mosaic"], progress=not quiet and _stderr_is_terminal(),
-                fps=opts["fps"], **_config(opts["bit_depth"], opts["equalize"]))
+    try:
+        paths = run(list(frames), out, workers=workers, scheduler=scheduler,
+                    chunk_size=chunk_size, metres_per_pixel=mpp, altitude=altitude,
+                    focal_px=focal_px, scale_range=opts["scale_range"],
+                    angle_range=opts["angle_range"], mosaic=not opts["no_mosaic"],
+                    progress=not quiet and _stderr_is_terminal(), fps=opts["fps"],
+                    **_config(opts["bit_depth"], opts["equalize"]))
+    except (KeyboardInterrupt, SystemError) as e:
+        # (as survey detect says what it kept: a trial saw a bare "interrupted")
+        if isinstance(e, SystemError) and not _interrupted(e):
+            raise
+        raise KeyboardInterrupt(_chunks_kept(out)) from None
     unit = "m" if (mpp is not None or altitude is not None) else "px"
     return report(_odometry_result(paths), time.perf_counter() - t0, unit, as_json)
 

@@ -48,7 +48,8 @@ __all__ = ["shift_flags", "read_chunk", "Chain", "measure_across"]
 
 POSED = ("origin", "measured")
 _ZERO = "pose_assumed: zero motion since frame "
-_SINCE = re.compile(r"(pose_assumed: (?:zero motion|constant velocity) since frame )(\d+)")
+_SINCE = re.compile(r"((?:pose_assumed: (?:zero motion|constant velocity) since|"
+                    r"after_gap: measured against|duplicate: the same pixels as) frame )(\d+)")
 _IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 _PAIR = ("dx", "dy", "rotation", "scale_change", "pair_matrix")
 _MEASURE = ("confidence", "nfa", "score", "overlap")
@@ -63,6 +64,11 @@ def shift_flags(flags: str, start: int) -> str:
     'little_overlap; pose_assumed: zero motion since frame 400'
     >>> shift_flags("unreadable: frame 7 cannot be decoded", 400)    # the video's own number
     'unreadable: frame 7 cannot be decoded'
+    >>> shift_flags("after_gap: measured against frame 15, whose pose was assumed", 20)
+    'after_gap: measured against frame 35, whose pose was assumed'
+    >>> shift_flags("duplicate: the same pixels as frame 4; pose_assumed: constant velocity "
+    ...             "since frame 4", 10)
+    'duplicate: the same pixels as frame 14; pose_assumed: constant velocity since frame 14'
     """
     return _SINCE.sub(lambda m: m.group(1) + str(int(m.group(2)) + start), flags)
 
