@@ -457,6 +457,13 @@ def test_cli_scheduler_nothing_listens(scenes, tmp_path, capsys, monkeypatch):
                           tmp_path / "o", "--scheduler", f"tcp://127.0.0.1:{port}")
     assert code == 2 and err.count("\n") == 1
     assert err.startswith(f"seahough: error: scheduler tcp://127.0.0.1:{port}: cannot connect")
+    # a trial: the failed run left survey.json and its inputs, and the corrected
+    # command (another pattern, a local cluster) was refused as "other settings"
+    assert not (tmp_path / "o" / "survey.json").exists()
+    assert not (tmp_path / "o" / "parts").exists()
+    code, out, err = _cli(capsys, "detect", "rect:90,50", scenes / "imgs", "--out",
+                          tmp_path / "o", "--workers", "1")
+    assert code in (0, 1) and "other settings" not in err, err
 
 
 def test_cli_odometry_wiring(tmp_path, capsys, monkeypatch):

@@ -422,3 +422,23 @@ def test_fps_times_the_frames_by_their_place_in_the_whole_survey(tmp_path):
     paths = survey_odometry(frames, tmp_path / "n", workers=1, chunk_size=6, mosaic=False,
                             progress=False)
     assert [r["time"] for r in read_odometry_csv(paths["csv"])] == [None] * 14
+
+
+def test_a_survey_that_cannot_reach_its_scheduler_leaves_no_settings(tmp_path, monkeypatch):
+    """A trial: a bad --scheduler left run.json, and the corrected command (other
+    ranges, a local cluster) was refused as a survey of other settings."""
+    import socket
+
+    import seahough.survey._cluster as CLUSTER
+
+    monkeypatch.setattr(CLUSTER, "CONNECT_TIMEOUT", "1s")
+    paths, _ = _frames(tmp_path / "f", 4)
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    with pytest.raises(seahough.ParameterError, match="cannot connect"):
+        survey_odometry(paths, tmp_path / "s", scheduler=f"tcp://127.0.0.1:{port}")
+    assert not (tmp_path / "s" / "run.json").exists()
+    got = survey_odometry(paths, tmp_path / "s", workers=1, scale_range=(0.8, 1.2),
+                          mosaic=False)
+    assert read_odometry_csv(got["csv"])[-1]["status"] == "measured"

@@ -288,6 +288,22 @@ class SurveyFolder:
         self._tidy()
         return self.done()
 
+    def discard_new(self) -> None:
+        """Remove what :meth:`start` wrote for a new survey of which nothing
+        was searched (its cluster could not be reached): the same command,
+        corrected, then starts afresh rather than meeting "other settings"."""
+        if self.done():
+            return
+        for p in (self.manifest, self.parts / "inputs.parquet"):
+            try:
+                p.unlink()
+            except OSError:
+                pass
+        try:
+            self.parts.rmdir()
+        except OSError:
+            pass
+
     def _inputs_count(self) -> int:
         try:
             return pq.read_metadata(self.parts / "inputs.parquet").num_rows

@@ -18,6 +18,7 @@ searched it, :data:`DIED`).
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import math
 import os
@@ -435,6 +436,7 @@ def detect(pattern, images, out, *, workers: int | None = None, scheduler: str |
     _prepare(detector, os.path.abspath(paths[0]))
     searched = 0
     with SurveyFolder(out) as folder:
+        new = not folder.manifest.exists()
         done = folder.start(settings, paths)
         if folder.moved:    # (the rows' paths as the survey's list has them)
             paths = [os.path.abspath(p) for p in paths]
@@ -442,7 +444,13 @@ def detect(pattern, images, out, *, workers: int | None = None, scheduler: str |
             done = folder.done()
         todo = [i for i in range(len(paths)) if i not in done]
         if todo:
-            with open_client(workers, scheduler) as client:
+            with contextlib.ExitStack() as stack:
+                try:
+                    client = stack.enter_context(open_client(workers, scheduler))
+                except BaseException:
+                    if new:   # (a bad --scheduler must not leave a survey that refuses the fix)
+                        folder.discard_new()
+                    raise
                 searched = _run(client, detector, paths, todo, folder, batch_size, progress,
                                 on_batch)
         counts = folder.finish()

@@ -19,6 +19,7 @@ a millisecond a frame (see ``docs/scale.md``).
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import sys
@@ -243,6 +244,7 @@ def odometry(frames, out, *, workers=None, scheduler=None, chunk_size=200,
         check_kind(run.path, "odometry")
         run.check_writable(run.csv)
         _check_same_survey(run, settings)      # (before anything of that survey is removed)
+        new = run.read_settings() is None
         run.clear_outputs()
         try:
             run.csv.unlink(missing_ok=True)       # an earlier survey's: made again below
@@ -254,7 +256,13 @@ def odometry(frames, out, *, workers=None, scheduler=None, chunk_size=200,
             shape = first_shape(reader, cfg)
         finally:
             reader.close()
-        with open_client(workers, scheduler) as client:
+        with contextlib.ExitStack() as stack:
+            try:
+                client = stack.enter_context(open_client(workers, scheduler))
+            except BaseException:
+                if new:   # (a bad --scheduler must not leave a survey that refuses the fix)
+                    run.sidecar.unlink(missing_ok=True)
+                raise
             results = _measure_chunks(client, plan, items, out_abs, options, progress, shape)
         # (the chunks' rows get their times here, by their frames' global numbers)
         reader = FrameReader(items, cfg.max_pixels, cfg.max_memory_mb, fps=fps)
