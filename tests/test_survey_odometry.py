@@ -442,3 +442,16 @@ def test_a_survey_that_cannot_reach_its_scheduler_leaves_no_settings(tmp_path, m
     got = survey_odometry(paths, tmp_path / "s", workers=1, scale_range=(0.8, 1.2),
                           mosaic=False)
     assert read_odometry_csv(got["csv"])[-1]["status"] == "measured"
+
+
+def test_a_survey_of_other_frames_in_the_same_folder_is_refused(tmp_path):
+    """A trial: survey odometry of another dive into an --out holding a survey
+    re-measured it without a word (survey detect refuses). Frames added after
+    the survey's own (a dive still recording) go on."""
+    paths, _ = _frames(tmp_path / "f", 8)
+    other, _ = _frames(tmp_path / "g", 8, seed=3)
+    survey_odometry(paths[:6], tmp_path / "s", workers=1, mosaic=False, progress=False)
+    with pytest.raises(seahough.ParameterError, match="holds a survey of other frames"):
+        survey_odometry(other, tmp_path / "s", workers=1, mosaic=False, progress=False)
+    got = survey_odometry(paths, tmp_path / "s", workers=1, mosaic=False, progress=False)
+    assert len(read_odometry_csv(got["csv"])) == 8

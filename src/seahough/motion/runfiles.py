@@ -281,12 +281,13 @@ class RunFolder:
                 raise WriteError(f"{p}: cannot remove the previous run's file "
                                  f"({_reason(e)})") from None
 
-    def write_settings(self, settings: dict, digest: str):
-        """``run.json``: the settings and the folder the run was started in,
-        written whole or not at all (a temporary file renamed over it; like
-        the CSV's rows it is flushed, not synced: a killed run keeps it)."""
+    def write_settings(self, settings: dict, digest: str, extra: dict | None = None):
+        """``run.json``: the settings and the folder the run was started in
+        (and ``extra`` keys: a survey's frames), written whole or not at all
+        (a temporary file renamed over it; like the CSV's rows it is
+        flushed, not synced: a killed run keeps it)."""
         tmp = self.path / (self.sidecar.name + ".tmp")
-        rec = {"settings_hash": digest, "cwd": os.getcwd(), "settings": settings}
+        rec = {"settings_hash": digest, "cwd": os.getcwd(), "settings": settings, **(extra or {})}
         try:
             with open(tmp, "w") as f:
                 json.dump(rec, f, indent=2)

@@ -20,6 +20,7 @@ a millisecond a frame (see ``docs/scale.md``).
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import os
 import sys
@@ -33,7 +34,7 @@ from ..config import ODOMETRY_CONFIG, Config, OdometryTuning
 from ..core.accumulator import check_ranges
 from ..errors import ParameterError, SeahoughError, WriteError
 from .._values import json_safe
-from ..io.frames import FrameReader, list_frames
+from ..io.frames import FrameReader, _pixels_fingerprint, list_frames, split_video_ref
 from ..motion.mosaic import build_mosaic
 from ..motion.runfiles import (RunFolder, check_kind, format_change, run_settings, settings_changes,
                                settings_hash, write_output)
@@ -61,12 +62,42 @@ def _for_workers(item):
     return os.path.abspath(item) if isinstance(item, str) else item
 
 
-def _check_same_survey(run: RunFolder, settings: dict) -> None:
+def frames_digest(items, n: int | None = None) -> str:
+    """16 hex digits naming the first ``n`` frames (all by default): files by
+    their absolute paths, arrays by their pixels' fingerprint.
+
+    >>> frames_digest(["a.png", "b.png"], 1) == frames_digest(["a.png", "c.png"], 1)
+    True
+    >>> frames_digest(["a.png", "b.png"]) == frames_digest(["a.png", "c.png"])
+    False
+    """
+    h = hashlib.blake2b(digest_size=8)
+    for it in items[:n]:
+        if it is None or isinstance(it, np.ndarray):
+            key = "none" if it is None else _pixels_fingerprint(it)
+        else:
+            video = split_video_ref(str(it))
+            key = (os.path.abspath(os.fspath(it)) if video is None
+                   else f"{os.path.abspath(video[0])}#{video[1]}")
+        h.update(key.encode("utf-8", "surrogateescape") + b"\0")
+    return h.hexdigest()
+
+
+def _check_same_survey(run: RunFolder, settings: dict, items=None) -> None:
     """ParameterError when ``run``'s folder holds a survey made with other
-    settings (a new metres per pixel is allowed: chunks are in pixels)."""
+    settings (a new metres per pixel is allowed: chunks are in pixels), or
+    of other frames (frames added after the survey's are allowed: a dive
+    still recording)."""
     old = run.read_settings()
     if old is None:
         return
+    was = old.get("inputs")
+    if items is not None and isinstance(was, dict) and isinstance(was.get("count"), int):
+        n = was["count"]
+        if len(items) < n or frames_digest(items, n) != was.get("hash"):
+            raise ParameterError(f"{run.path}: holds a survey of other frames ({n} frames, not "
+                                 f"the first of the {len(items)} given). Use another --out, "
+                                 "or remove the folder to start over")
     why = format_change(old["settings"], settings)
     if why:
         raise ParameterError(f"{run.path}: holds a survey that {why.removeprefix('the run ')}. "
@@ -243,14 +274,15 @@ def odometry(frames, out, *, workers=None, scheduler=None, chunk_size=200,
     with RunFolder(out) as run:
         check_kind(run.path, "odometry")
         run.check_writable(run.csv)
-        _check_same_survey(run, settings)      # (before anything of that survey is removed)
+        _check_same_survey(run, settings, items)   # (before anything of it is removed)
         new = run.read_settings() is None
         run.clear_outputs()
         try:
             run.csv.unlink(missing_ok=True)       # an earlier survey's: made again below
         except OSError as e:
             raise WriteError(f"{run.csv}: cannot replace it ({e.strerror or e})") from None
-        run.write_settings(settings, digest)
+        run.write_settings(settings, digest,
+                           {"inputs": {"count": len(items), "hash": frames_digest(items)}})
         reader = FrameReader(items, cfg.max_pixels, cfg.max_memory_mb)
         try:
             shape = first_shape(reader, cfg)
