@@ -575,3 +575,22 @@ def test_a_workers_first_image_is_timed_without_the_warm_up(scenes, monkeypatch)
     rows, _ = SD.search_batch([(9, str(scenes / "imgs" / "z_bad.png")), paths[0]], other)
     assert rows[0][2] == "error" and "z_bad.png" not in rows[0][8] and rows[0][8]
     assert rows[1][2] in ("found", "not found") and len(calls) == 2 and other in SD._WARM
+
+
+def test_a_workers_warning_names_the_file_on_one_line(tmp_path, capsys, monkeypatch):
+    """A trial: a 12-bit PNG in a survey gave Python's form of the warning, from
+    Dask's source line, with "image" for the file; seahough detect names it."""
+    import seahough.io.images as I
+    from seahough.survey.detect import search_batch
+
+    monkeypatch.setattr(I, "_SAID_BITS", set())        # (said once a process)
+    img = np.zeros((120, 160), np.uint16)
+    img[30:90, 40:120] = 4000
+    p = tmp_path / "c12.png"
+    cv2.imwrite(str(p), img)
+    rows, _ = search_batch([(0, str(p))], seahough.Detector(seahough.Pattern.rectangle(60, 40)))
+    err = capsys.readouterr().err
+    assert rows[0][2] in ("found", "not found")
+    assert err.startswith(f"seahough: warning: {p}: a 16-bit image whose values reach only "
+                          "4000"), err
+    assert err.count("\n") == 1

@@ -24,6 +24,7 @@ import math
 import os
 import sys
 import time
+import warnings
 import weakref
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,7 +33,8 @@ from .._validate import number
 from ..config import config_record
 from ..core.detector import Detector
 from ..core.pattern import Pattern
-from ..errors import ParameterError, SeahoughError, without_name
+from ..errors import (BitDepthWarning, LevelsWarning, ParameterError, SeahoughError,
+                      without_name)
 from ._cluster import open_client
 from ._inputs import expand_inputs
 from ._shards import SurveyFolder, image_row
@@ -187,6 +189,19 @@ def _warm_up(detector: Detector, path: str) -> None:
     _WARM.add(detector)
 
 
+def _say(said, path: str) -> None:
+    """A worker's warnings about an image, one line each naming the file, as
+    ``seahough detect`` says them (they came out as Python shows a warning:
+    Dask's source line, and "image" for the file); others as Python shows them."""
+    for w in said:
+        if issubclass(w.category, (BitDepthWarning, LevelsWarning)):
+            msg = str(w.message)
+            msg = f"{path}: {msg[len('image: '):]}" if msg.startswith("image: ") else msg
+            print(f"seahough: warning: {' '.join(msg.split())}", file=sys.stderr, flush=True)
+        else:
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+
+
 def search_batch(batch: list, detector: Detector) -> tuple[list, list]:
     """Search the images of ``batch`` (``(index, path)`` pairs), on a worker.
 
@@ -199,12 +214,18 @@ def search_batch(batch: list, detector: Detector) -> tuple[list, list]:
     cfg = detector.config
     rows, dets = [], []
     for index, path in batch:
-        if detector not in _WARM:
-            _warm_up(detector, path)
+        with warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always", (BitDepthWarning, LevelsWarning))
+            if detector not in _WARM:
+                _warm_up(detector, path)
+        _say(said, path)
         t0 = time.perf_counter()
         try:
             img = read_image(path, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
-            res = detector.search(img)
+            with warnings.catch_warnings(record=True) as said:
+                warnings.simplefilter("always", (BitDepthWarning, LevelsWarning))
+                res = detector.search(img)
+            _say(said, path)
         except Exception as e:  # noqa: BLE001 - one image must not stop a survey
             ms = 1000.0 * (time.perf_counter() - t0)
             rows.append(image_row(index, None, "error", 0, ms, error=_message(e, path)))
