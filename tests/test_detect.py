@@ -593,3 +593,17 @@ def test_a_thick_line_in_a_large_photo_is_searched_where_its_band_has_edges():
     assert abs(d.line_angle - 90.0) < 2.0 and abs(d.x - 1916) < 4, (d.x, d.line_angle)
     # a band that keeps its edges at the usual scale is searched there, as before
     assert seahough.Detector(seahough.Pattern.line(120, 12)).working_factor((480, 640)) == 0.5
+
+
+def test_key_points_for_many_results_also_at_a_known_scale():
+    """A search for many results takes 240 key points for each, also at a
+    known scale and rotation (tags of one size: the paper's 2-D case, which
+    keeps Config.n_keypoints_2d otherwise); a Config's own count is kept."""
+    disc = seahough.Pattern.circle(15)
+    n = lambda det: det._n_keypoints((480, 640), 0.5)   # noqa: E731
+    assert n(seahough.Detector(disc, (1, 1))) == seahough.Config().n_keypoints_2d
+    assert n(seahough.Detector(disc, (1, 1), max_results=40)) == 240 * 40
+    assert n(seahough.Detector(disc, (0.5, 2), max_results=40)) == 240 * 40
+    assert n(seahough.Detector(disc, (0.5, 2), max_results=200)) == 20_000
+    assert n(seahough.Detector(disc, (0.5, 2), max_results=40,
+                               config=seahough.Config(n_keypoints=1500))) is None

@@ -426,17 +426,16 @@ class Detector:
         A search asked for more than 5 results takes
         :data:`KEYPOINTS_PER_RESULT` for each (many objects to count).
         """
-        cfg = self.config
-        n = cfg.n_keypoints_2d
-        a0, a1 = self._angles()
-        known = self.scale_range[0] == self.scale_range[1] and a0 == a1
-        if known and n is not None:
-            return n
-        p = self.pattern
+        cfg, p = self.config, self.pattern
         many = None     # (many results asked for: key points for each, KEYPOINTS_PER_RESULT)
         if self.max_results > _DEFAULT_RESULTS and cfg.n_keypoints == _DEFAULT_KEYPOINTS \
                 and not p.is_frame:
             many = int(min(MAX_KEYPOINTS, KEYPOINTS_PER_RESULT * self.max_results))
+        n = cfg.n_keypoints_2d
+        a0, a1 = self._angles()
+        known = self.scale_range[0] == self.scale_range[1] and a0 == a1
+        if known and n is not None:
+            return n if many is None else max(n, many)
         if shape is None or factor is None or p.is_frame or p.is_line or not p.is_photo \
                 or cfg.n_keypoints != _DEFAULT_KEYPOINTS or p.has_long_borders(cfg):
             return many
