@@ -593,6 +593,10 @@ def test_a_thick_line_in_a_large_photo_is_searched_where_its_band_has_edges():
     assert abs(d.line_angle - 90.0) < 2.0 and abs(d.x - 1916) < 4, (d.x, d.line_angle)
     # a band that keeps its edges at the usual scale is searched there, as before
     assert seahough.Detector(seahough.Pattern.line(120, 12)).working_factor((480, 640)) == 0.5
+    # a thicker band, with edges at scale 1 but 1.6 px at the smallest scale, in an
+    # image brought down 12 times: 3 px at the smallest scale too (a review)
+    assert seahough.Detector(seahough.Pattern.line(690, 40)).working_factor(
+        (2250, 4000)) == pytest.approx(3.0 / (40 * 0.5))
 
 
 def test_key_points_for_many_results_also_at_a_known_scale():
@@ -607,3 +611,5 @@ def test_key_points_for_many_results_also_at_a_known_scale():
     assert n(seahough.Detector(disc, (0.5, 2), max_results=200)) == 20_000
     assert n(seahough.Detector(disc, (0.5, 2), max_results=40,
                                config=seahough.Config(n_keypoints=1500))) is None
+    assert n(seahough.Detector(disc, (1, 1), max_results=40,
+                               config=seahough.Config(n_keypoints_2d=300))) == 300

@@ -243,7 +243,6 @@ def test_pushes_from_two_threads_are_taken_in_turn_and_the_frame_is_copied():
     # (66 px strips: frames so small keep every pixel, no border cropped, no copy made)
     grey = [np.ascontiguousarray(cv2.cvtColor(f, cv2.COLOR_BGR2GRAY)[80:146]).astype(np.float32)
             for f in frames[:4]]
-    copies = [seahough.Odometer().push(g) for g in grey[:1]]
     ref = seahough.Odometer()
     want = [ref.push(g.copy()) for g in grey]
     buf = np.empty_like(grey[0])
@@ -252,7 +251,11 @@ def test_pushes_from_two_threads_are_taken_in_turn_and_the_frame_is_copied():
     for g in grey:
         buf[...] = g
         got.append(odo.push(buf))
-    assert copies[0]["status"] == "origin"
+    import copy
+    import pickle
+
+    assert pickle.loads(pickle.dumps(odo))._next == odo._next == 4   # (the lock not pickled)
+    assert copy.deepcopy(ref)._next == 4
     assert [r["dy"] for r in got[1:]] == pytest.approx([r["dy"] for r in want[1:]], abs=1e-6)
     with pytest.raises(seahough.ImageValueError, match="frame: expected a numpy array"):
         odo.push([[1, 2], [3, 4]])

@@ -583,7 +583,10 @@ def test_a_workers_warning_names_the_file_on_one_line(tmp_path, capsys, monkeypa
     import seahough.io.images as I
     from seahough.survey.detect import search_batch
 
+    import warnings
+
     monkeypatch.setattr(I, "_SAID_BITS", set())        # (said once a process)
+    monkeypatch.setattr(warnings, "showwarning", warnings.showwarning)   # (restored after)
     img = np.zeros((120, 160), np.uint16)
     img[30:90, 40:120] = 4000
     p = tmp_path / "c12.png"

@@ -444,7 +444,7 @@ def test_a_survey_that_cannot_reach_its_scheduler_leaves_no_settings(tmp_path, m
     assert read_odometry_csv(got["csv"])[-1]["status"] == "measured"
 
 
-def test_a_survey_of_other_frames_in_the_same_folder_is_refused(tmp_path):
+def test_a_survey_of_other_frames_in_the_same_folder_is_refused(tmp_path, monkeypatch):
     """A trial: survey odometry of another dive into an --out holding a survey
     re-measured it without a word (survey detect refuses). Frames added after
     the survey's own (a dive still recording) go on."""
@@ -453,5 +453,18 @@ def test_a_survey_of_other_frames_in_the_same_folder_is_refused(tmp_path):
     survey_odometry(paths[:6], tmp_path / "s", workers=1, mosaic=False, progress=False)
     with pytest.raises(seahough.ParameterError, match="holds a survey of other frames"):
         survey_odometry(other, tmp_path / "s", workers=1, mosaic=False, progress=False)
+    # an extension that fails before measuring (no scheduler there) records nothing:
+    # the survey's own command still goes on (a review: it was refused for good)
+    import socket
+
+    import seahough.survey._cluster as CLUSTER
+
+    monkeypatch.setattr(CLUSTER, "CONNECT_TIMEOUT", "1s")
+    with socket.socket() as sk:
+        sk.bind(("127.0.0.1", 0))
+        port = sk.getsockname()[1]
+    with pytest.raises(seahough.ParameterError, match="cannot connect"):
+        survey_odometry(paths[:7], tmp_path / "s", scheduler=f"tcp://127.0.0.1:{port}")
+    survey_odometry(paths[:6], tmp_path / "s", workers=1, mosaic=False, progress=False)
     got = survey_odometry(paths, tmp_path / "s", workers=1, mosaic=False, progress=False)
     assert len(read_odometry_csv(got["csv"])) == 8

@@ -197,7 +197,8 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, draw: Dr
         head += f"; not found: {', '.join(missing)}"
     near = best_declined(res) if n == 0 and not res.note else None
     if near is not None:  # (what came closest, and why it was not reported)
-        head += f"; best candidate: score {near.score:.2f}, {near.declined}"
+        who = f"{near.pattern}, " if getattr(near, "pattern", "") else ""
+        head += f"; best candidate: {who}score {near.score:.2f}, {near.declined}"
     names = list(getattr(detector, "parts", None) or {}) or None
     ov = Path(f"{base}_overlay.png")
     if isinstance(detector, CurveSearch):    # curves: the overlay only

@@ -27,7 +27,7 @@ from .candidates import PoseComparison, SearchContext, find_candidates
 from .features import Features, extract_features
 from .pattern import Pattern
 from .blanks import Blanks, find_blanks
-from .preprocess import choose_factor, prepare_image
+from .preprocess import MIN_BAND_PX, choose_factor, prepare_image
 from .ranking import (FLAG_ALONG_LINE, FLAG_AMBIGUOUS, FLAG_GREY, FLAG_OUTSIDE_RANGE,
                       FLAG_PARTIAL, FLAG_RANGE_EDGE, Detection, confidence, line_parameters, rank)
 
@@ -49,16 +49,12 @@ TEXTURE_DENSITY = 0.25
 #: 640x480 views with about 28 on their area, lose one of 50: 96 -> 94 %.)
 MAX_KEYPOINTS = 20_000
 MIN_ON_PATTERN = 16
-#: A search asked for more than the default's 5 results takes this many key
-#: points for each (the default's 1,200 are 240 for each of 5), up to
-#: :data:`MAX_KEYPOINTS`, unless its Config sets ``n_keypoints``: a seabed
-#: photo's texture holds most of the strongest edges, and with 1,200 the
-#: fainter ones of 20-60 rings or squares drawn on it had none (a scientist
-#: counting tags: 31 of 60 found, each reported at confidence 1, no flag).
-#: Chosen on rings and squares drawn on two seabed photos (bench/bench_counting.py,
-#: tune part: 5-60 of them, max_results N + 10): recall 43 -> 92 %, no false
-#: detection either way, 1.7x the time (120 each: a little less); on three
-#: other photos (its test part) 44 -> 88 % (docs/counting.md).
+#: A search for more than 5 results takes this many key points for each (the
+#: default's 1,200 are 240 for each of 5), up to :data:`MAX_KEYPOINTS`, unless
+#: its Config sets ``n_keypoints``: a seabed's texture holds most of the
+#: strongest edges, and with 1,200 the fainter of 20-60 rings or squares drawn
+#: on it had none (a scientist counting tags: 31 of 60 found, no word). Chosen
+#: on two seabed photos, recall and time: bench/bench_counting.py, docs/counting.md.
 KEYPOINTS_PER_RESULT = 240
 #: Why a search ended early with no detections ("" when it ran to the end).
 SEARCH_NOTES = ("", "no edges", "pattern larger than the image",
@@ -74,8 +70,8 @@ class SearchResult:
     may then be None. ``candidates`` are the refined candidate poses
     (:class:`~.candidates.Candidate`: ``pose``, ``score``, ``nfa``), in the
     order of their working-scale score (the coarse one: the full-resolution
-    finish, which ranks the detections, may order them otherwise), at most ``Config.n_candidates`` (7; ``max_results + 2`` when
-    more results are asked for) per pattern; one not reported
+    finish, which ranks the detections, may order them otherwise), at most
+    ``Config.n_candidates`` (7; ``max_results + 2`` when more) per pattern; one not reported
     says why in its ``declined`` (e.g. "NFA 1.08 over max_nfa 1", or a
     disc's pose for a ring: "its hole is not in the image"). An object in
     view that is no candidate at all had too few votes: more candidates
@@ -101,9 +97,8 @@ class SearchResult:
 
     @property
     def left_out(self) -> int:
-        """How many candidates scored over ``min_score`` and were not
-        reported because ``max_results`` detections were reached: more
-        objects may be there (ask for more results). 0 when none was."""
+        """Candidates over ``min_score`` not reported because ``max_results``
+        was reached: more objects may be there (ask for more results)."""
         return sum(1 for c in self.candidates if c.declined.startswith("max_results"))
 
 
@@ -113,6 +108,7 @@ MIN_SEGMENTS = 4
 #: Config's own number of key points: another one is a user's choice
 #: (:meth:`Detector._n_keypoints` keeps it).
 _DEFAULT_KEYPOINTS = Config().n_keypoints
+_DEFAULT_2D = Config().n_keypoints_2d
 #: Detector's own number of results (:data:`KEYPOINTS_PER_RESULT` above it).
 _DEFAULT_RESULTS = 5
 
@@ -240,18 +236,21 @@ class Detector:
         """
         return self.search(image).detections
 
-    def search(self, image, features: Features | None = None) -> SearchResult:
+    def search(self, image, features: Features | None = None, *,
+               name: str | None = None) -> SearchResult:
         """Like :meth:`detect`, also returning the accumulator planes, all
         scored candidates and the stage timings.
 
         ``features`` may pass the image's already computed features (from a
         previous search at the same working scale), e.g. in dead reckoning.
+        ``name``: what a warning about the image calls it (default: its path,
+        or "image" for an array).
         """
         cfg = self.config
         t0 = time.perf_counter()
         if self.parts:
-            return self._search_parts(image, features, t0)
-        label = str(image) if isinstance(image, (str, os.PathLike)) else "image"
+            return self._search_parts(image, features, t0, name)
+        label = name or (str(image) if isinstance(image, (str, os.PathLike)) else "image")
         if self._grey is not None and isinstance(image, (str, os.PathLike)):
             # (decoded once: a colour search that finds nothing is done again in grey)
             image = read_image(image, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
@@ -372,18 +371,23 @@ class Detector:
     def working_factor(self, shape) -> float:
         """The downscale factor of a search of an image of ``shape``
         (:func:`~.preprocess.choose_factor`: the pattern at its smallest
-        scale kept large enough); a line whose band has no edges left at it
-        (its two borders merged: a 690 x 33 px post in a 4000 px photo was an
-        error, "0 edge segments") is searched where its band keeps
-        :data:`~.preprocess.MIN_BAND_PX` across."""
-        p, cfg = self.pattern, self.config
-        f = choose_factor(shape, cfg, p.extent, self.scale_range[0])
+        scale kept large enough). A line whose band at its smallest scale
+        is under :data:`~.preprocess.MIN_BAND_PX` across in an image brought
+        down more than 4 times, or has no edges left at all (its two borders
+        merged: a 690 x 33 px post in a 4000 px photo was an error, "0 edge
+        segments"), is searched where the band keeps that much."""
+        p, cfg, s0 = self.pattern, self.config, self.scale_range[0]
+        f = choose_factor(shape, cfg, p.extent, s0)
         if p.is_line and cfg.downscale is None:
-            try:
-                p.features(f, cfg)
-            except PatternError:
-                f = max(f, choose_factor(shape, cfg, p.extent, self.scale_range[0],
-                                         band_width=p.line_width))
+            # (else only with no edges at all: thin ropes in 640 px images as before)
+            thin = f < 0.25 and p.line_width * s0 * f < MIN_BAND_PX
+            if not thin:
+                try:
+                    p.features(f, cfg)
+                except PatternError:
+                    thin = True
+            if thin:
+                f = max(f, choose_factor(shape, cfg, p.extent, s0, band_width=p.line_width))
         return f
 
     def _edge_gap(self, pf, factor: float) -> float | None:
@@ -434,8 +438,8 @@ class Detector:
         n = cfg.n_keypoints_2d
         a0, a1 = self._angles()
         known = self.scale_range[0] == self.scale_range[1] and a0 == a1
-        if known and n is not None:
-            return n if many is None else max(n, many)
+        if known and n is not None:   # (a Config's own 2-D count is the user's choice)
+            return n if many is None or n != _DEFAULT_2D else max(n, many)
         if shape is None or factor is None or p.is_frame or p.is_line or not p.is_photo \
                 or cfg.n_keypoints != _DEFAULT_KEYPOINTS or p.has_long_borders(cfg):
             return many
@@ -472,7 +476,8 @@ class Detector:
             return (a0, a0 + 360.0)
         return self.angle_range if searched != self.angle_range else None
 
-    def _search_parts(self, image, features: Features | None, t0: float) -> SearchResult:
+    def _search_parts(self, image, features: Features | None, t0: float,
+                      name: str | None = None) -> SearchResult:
         """Every pattern searched in one image. The image's features are
         computed once per working scale (patterns of similar size share
         one) and per kind of edges (grey, colour: each pattern's own
@@ -482,9 +487,8 @@ class Detector:
         cfg = self.config
         parts = self.parts
         kinds = sorted({bool(d.config.colour) for d in parts.values()})
-        label = "image"
+        label = name or (str(image) if isinstance(image, (str, os.PathLike)) else "image")
         if len(kinds) > 1 and isinstance(image, (str, os.PathLike)):   # (decoded once)
-            label = str(image)
             image = read_image(image, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
         images = {c: to_image(image, c, name=label, max_pixels=cfg.max_pixels,
                               max_memory_mb=cfg.max_memory_mb, bit_depth=cfg.bit_depth)

@@ -54,8 +54,9 @@ class Gradients:
         return ((np.asarray(x) + 0.5) * self.fx - 0.5, (np.asarray(y) + 0.5) * self.fy - 0.5)
 
 
-#: A band pattern (a rope, a post: ``Pattern.line``) keeps at least this many
-#: working pixels across at its smallest searched scale: its two borders
+#: A band pattern (a rope, a post: ``Pattern.line``) searched in an image
+#: brought far down keeps this many working pixels across at its smallest
+#: searched scale (``Detector.working_factor`` says when): its two borders
 #: merge below it (a 690 x 33 px post in a 4000 px photo, brought to 320 px:
 #: 1.3 px across, "0 edge segments", exit 2).
 MIN_BAND_PX = 3.0

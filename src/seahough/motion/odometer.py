@@ -114,8 +114,17 @@ class Odometer:
         #: how a frame the state needs and does not hold is read again (a
         #: resumed run's keyframe): index -> grey image
         self.fetch = None
-        self._lock = threading.Lock()
+        self._lock = threading.RLock()
         self.reset()
+
+    def __getstate__(self):       # (a lock is not pickled: a copy gets its own)
+        state = dict(self.__dict__)
+        state.pop("_lock", None)
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._lock = threading.RLock()
 
     def reset(self) -> None:
         """Start a new track: the next frame is frame 0 of it (after a change
@@ -162,6 +171,8 @@ class Odometer:
         ImageValueError
             ``frame`` is neither an array, a path nor None.
 
+        Notes
+        -----
         One push at a time: pushes from several threads are taken in turn
         (a lock), in the order they get it.
         """

@@ -183,23 +183,29 @@ def _warm_up(detector: Detector, path: str) -> None:
     cfg = detector.config
     try:
         detector.search(read_image(path, max_pixels=cfg.max_pixels,
-                                   max_memory_mb=cfg.max_memory_mb))
+                                   max_memory_mb=cfg.max_memory_mb), name=path)
     except Exception:  # noqa: BLE001 - (the timed search says it)
         return
     _WARM.add(detector)
 
 
-def _say(said, path: str) -> None:
-    """A worker's warnings about an image, one line each naming the file, as
-    ``seahough detect`` says them (they came out as Python shows a warning:
-    Dask's source line, and "image" for the file); others as Python shows them."""
-    for w in said:
-        if issubclass(w.category, (BitDepthWarning, LevelsWarning)):
-            msg = str(w.message)
-            msg = f"{path}: {msg[len('image: '):]}" if msg.startswith("image: ") else msg
-            print(f"seahough: warning: {' '.join(msg.split())}", file=sys.stderr, flush=True)
+def _one_line_warnings() -> None:
+    """On a worker: seahough's warnings about an input (each names its file)
+    one line each, as ``seahough detect`` says them (they came out in
+    Python's form, from Dask's source line); others as Python shows them.
+    Process-wide, once (a worker's threads share it)."""
+    if getattr(warnings.showwarning, "_seahough", False):
+        return
+    shown = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, (BitDepthWarning, LevelsWarning)):
+            print(f"seahough: warning: {' '.join(str(message).split())}", file=sys.stderr,
+                  flush=True)
         else:
-            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+            shown(message, category, filename, lineno, file, line)
+    show._seahough = True
+    warnings.showwarning = show
 
 
 def search_batch(batch: list, detector: Detector) -> tuple[list, list]:
@@ -213,19 +219,14 @@ def search_batch(batch: list, detector: Detector) -> tuple[list, list]:
 
     cfg = detector.config
     rows, dets = [], []
+    _one_line_warnings()
     for index, path in batch:
-        with warnings.catch_warnings(record=True) as said:
-            warnings.simplefilter("always", (BitDepthWarning, LevelsWarning))
-            if detector not in _WARM:
-                _warm_up(detector, path)
-        _say(said, path)
+        if detector not in _WARM:
+            _warm_up(detector, path)
         t0 = time.perf_counter()
         try:
             img = read_image(path, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
-            with warnings.catch_warnings(record=True) as said:
-                warnings.simplefilter("always", (BitDepthWarning, LevelsWarning))
-                res = detector.search(img)
-            _say(said, path)
+            res = detector.search(img, name=path)
         except Exception as e:  # noqa: BLE001 - one image must not stop a survey
             ms = 1000.0 * (time.perf_counter() - t0)
             rows.append(image_row(index, None, "error", 0, ms, error=_message(e, path)))

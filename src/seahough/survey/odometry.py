@@ -64,7 +64,8 @@ def _for_workers(item):
 
 def frames_digest(items, n: int | None = None) -> str:
     """16 hex digits naming the first ``n`` frames (all by default): files by
-    their absolute paths, arrays by their pixels' fingerprint.
+    their real paths (as a chunk's resume compares them), arrays by their
+    pixels' fingerprint.
 
     >>> frames_digest(["a.png", "b.png"], 1) == frames_digest(["a.png", "c.png"], 1)
     True
@@ -77,8 +78,8 @@ def frames_digest(items, n: int | None = None) -> str:
             key = "none" if it is None else _pixels_fingerprint(it)
         else:
             video = split_video_ref(str(it))
-            key = (os.path.abspath(os.fspath(it)) if video is None
-                   else f"{os.path.abspath(video[0])}#{video[1]}")
+            key = (os.path.realpath(os.fspath(it)) if video is None
+                   else f"{os.path.realpath(video[0])}#{video[1]}")
         h.update(key.encode("utf-8", "surrogateescape") + b"\0")
     return h.hexdigest()
 
@@ -281,8 +282,10 @@ def odometry(frames, out, *, workers=None, scheduler=None, chunk_size=200,
             run.csv.unlink(missing_ok=True)       # an earlier survey's: made again below
         except OSError as e:
             raise WriteError(f"{run.csv}: cannot replace it ({e.strerror or e})") from None
-        run.write_settings(settings, digest,
-                           {"inputs": {"count": len(items), "hash": frames_digest(items)}})
+        # (the frames a survey holds are recorded once measured: an extension
+        # that fails, or is cut short, must not refuse the survey's own command)
+        was = (run.read_settings() or {}).get("inputs")
+        run.write_settings(settings, digest, {"inputs": was} if was else None)
         reader = FrameReader(items, cfg.max_pixels, cfg.max_memory_mb)
         try:
             shape = first_shape(reader, cfg)
@@ -296,6 +299,8 @@ def odometry(frames, out, *, workers=None, scheduler=None, chunk_size=200,
                     run.sidecar.unlink(missing_ok=True)
                 raise
             results = _measure_chunks(client, plan, items, out_abs, options, progress, shape)
+        run.write_settings(settings, digest,
+                           {"inputs": {"count": len(items), "hash": frames_digest(items)}})
         # (the chunks' rows get their times here, by their frames' global numbers)
         reader = FrameReader(items, cfg.max_pixels, cfg.max_memory_mb, fps=fps)
         try:

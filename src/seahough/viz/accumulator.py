@@ -184,6 +184,9 @@ def plot_accumulator(planes, detections=(), path=None, *, title=None, note=None,
         Where to save the PNG.
     title : str, optional
         A line above both panels.
+    patterns : list of str, optional
+        The names of a search's patterns, for each pattern's colour (as
+        :func:`~seahough.viz.plot_detections` takes them).
     best : Candidate, optional
         When nothing was found: the best candidate not reported (its
         refined pose, which the table gives), ringed and labelled; the
