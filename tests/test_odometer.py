@@ -62,7 +62,7 @@ def test_a_dropped_frame_is_an_unreadable_row_and_the_next_one_is_measured(tmp_p
         assert got[3]["status"] == "unreadable" and got[3]["x"] is None
         assert got[3]["flags"] == "unreadable: no frame (None: a dropped frame)"
         assert got[4]["status"] == "measured" and got[4]["ref"] <= 2 and got[4]["flags"] == ""
-    with pytest.raises(seahough.ParameterError, match="frames: item 1 is a int; expected image"):
+    with pytest.raises(seahough.ParameterError, match=r"frames: item 1 \(int\) is not an image path"):
         run_odometry([frames[0], 5], tmp_path / "bad", progress=False)
 
 

@@ -247,8 +247,8 @@ def list_frames(frames) -> list:
             else:
                 out.append(s)
         else:
-            raise ParameterError(f"frames: item {len(out)} is a {type(it).__name__}; expected "
-                                 "image paths or arrays (None: a dropped frame)")
+            raise ParameterError(f"frames: item {len(out)} ({type(it).__name__}) is not an image "
+                                 "path, an array or None (a dropped frame)")
     if not out:
         raise ParameterError("frames: the list is empty")
     return out
