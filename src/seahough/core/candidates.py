@@ -247,6 +247,9 @@ class SearchContext:
     #: how many searches of the image this one completes (a painted pattern's
     #: grey search after an empty colour one: 2): the number of tests counts them
     searches: int = 1
+    #: many results asked for, to count objects (``Detector(max_results > 5)``):
+    #: every candidate that could pass min_score is finished (ranking)
+    counting: bool = False
 
     @property
     def n_candidates(self) -> int:

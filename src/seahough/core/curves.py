@@ -550,9 +550,8 @@ def find_curves(image, width, *, width_range=(0.5, 1.5), polarity="bright",
     curves: list[Curve] = []
     # a few more seed lines than curves (some do not grow): those of
     # Config.n_candidates, more only when more curves are asked for
-    n_seeds = max_curves + 4
-    if n_seeds <= cfg.n_candidates + 2:
-        n_seeds = min(n_seeds, cfg.n_candidates)
+    n_seeds = max_curves + 4 if max_curves + 4 > cfg.n_candidates + 2 else min(
+        max_curves + 4, cfg.n_candidates)
     seeds = [_SEED_TIMES * length] + ([length] if _SHORT_SEEDS and _SEED_TIMES != 1 else [])
     feats = None
     for seed_length in seeds:
@@ -560,6 +559,7 @@ def find_curves(image, width, *, width_range=(0.5, 1.5), polarity="bright",
             break
         seeder = Detector(Pattern.line(seed_length, w, polarity=polarity), s_range,
                           (0.0, 180.0), config=cfg, max_results=n_seeds, max_nfa=max_nfa)
+        seeder._counting = False   # (seeds to follow, not objects to count)
         res = seeder.search(gray, features=feats)
         feats = res.features                  # the shorter seed: on the same features
         why = {}                              # detection index -> why it made no curve

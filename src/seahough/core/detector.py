@@ -97,8 +97,7 @@ class SearchResult:
 
     @property
     def left_out(self) -> int:
-        """Candidates over ``min_score`` not reported because ``max_results``
-        was reached: more objects may be there (ask for more results)."""
+        """Candidates over ``min_score`` left out by ``max_results``: more objects may be there."""
         return sum(1 for c in self.candidates if c.declined.startswith("max_results"))
 
 
@@ -197,6 +196,7 @@ class Detector:
         if auto:
             self.config = self.config.replace(colour=pattern.in_colour(self.config))
         self.max_results = int(number("max_results", max_results, lo=1, integer=True))
+        self._counting = self.max_results > _DEFAULT_RESULTS   # (many objects: see rank)
         self.min_score = number("min_score", min_score, lo=0.0, hi=1.0)
         self.min_confidence = number("min_confidence", min_confidence, lo=0.0, hi=1.0)
         self.max_nfa = check_max_nfa(max_nfa)
@@ -243,8 +243,7 @@ class Detector:
 
         ``features`` may pass the image's already computed features (from a
         previous search at the same working scale), e.g. in dead reckoning.
-        ``name``: what a warning about the image calls it (default: its path,
-        or "image" for an array).
+        ``name``: what a warning about the image calls it (default: its path, or "image").
         """
         cfg = self.config
         t0 = time.perf_counter()
@@ -356,7 +355,8 @@ class Detector:
                             angles, self.max_results, self.min_score,
                             PoseComparison(p, pf, bins.step, self.scale_range,
                                            angles, cfg.search.overlap),
-                            self.max_nfa, self._counted_angles(angles), searches)
+                            self.max_nfa, self._counted_angles(angles), searches,
+                            self._counting)
         cands = find_candidates(ctx, votes)
         t3 = time.perf_counter()
         timings["peaks_refine"] = t3 - t2
@@ -432,7 +432,7 @@ class Detector:
         """
         cfg, p = self.config, self.pattern
         many = None     # (many results asked for: key points for each, KEYPOINTS_PER_RESULT)
-        if self.max_results > _DEFAULT_RESULTS and cfg.n_keypoints == _DEFAULT_KEYPOINTS \
+        if self._counting and cfg.n_keypoints == _DEFAULT_KEYPOINTS \
                 and not p.is_frame:
             many = int(min(MAX_KEYPOINTS, KEYPOINTS_PER_RESULT * self.max_results))
         n = cfg.n_keypoints_2d

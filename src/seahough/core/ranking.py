@@ -140,6 +140,7 @@ class Detection(ValueEquality):
         return d
 
 
+
 def confidence(score: float, runner_up: float) -> float:
     """How distinct a find is from the best other candidate: of the pattern
     that the runner-up leaves unexplained, the share the find explains.
@@ -379,12 +380,16 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
     """
     cmp = ctx.compare
     best = max((c.work_score for c in cands), default=0.0)
-    pre = max(0.85 * ctx.min_score, 0.6 * best)  # only those that could win
+    # only those that could win; counting (many results asked for), every one
+    # that could pass min_score: a half-buried object is not judged against a
+    # clean one elsewhere in the image
+    share = 0.0 if ctx.counting else 0.6
+    pre = max(0.85 * ctx.min_score, share * best)
     todo = [c for c in cands if c.work_score >= pre][: ctx.max_results + 2]
     for c in cands:
         c.placed = _full_pose(c.fit.pose, ctx.features)
         if c.work_score < pre:   # (which bound: a user could not tell what to change)
-            bound = ("0.85 x min_score" if 0.85 * ctx.min_score >= 0.6 * best
+            bound = ("0.85 x min_score" if 0.85 * ctx.min_score >= share * best
                      else "0.6 x the best candidate's")
             c.declined = (f"score {c.work_score:.3g} (coarse, before the full-resolution "
                           f"finish) under {pre:.3g} ({bound}), the least that could win")
