@@ -188,10 +188,12 @@ def test_errors_retried_and_more_images_added(scenes, cluster, tmp_path, capsys)
             survey_detect(_pattern(scenes), inputs, out, retry_errors=True, **kw)
     finally:
         shards.SurveyFolder._write = real_write
-    assert json.loads((out / "survey.json").read_text())["state"] == "running"
+    assert json.loads((out / "survey.json").read_text())["state"] == "stopped"
     assert not (out / "images.parquet").exists()
     r = survey_detect(_pattern(scenes), inputs, out, retry_errors=True, **kw)
     assert (r.total, r.errors, r.processed, r.found) == (3, 0, 1, 3)
+    manifest = json.loads(r.manifest.read_text())
+    assert manifest["state"] == "complete" and "stopped" not in manifest
     rows = _check_once(r, 3)
     assert rows[2]["status"] == "found" and rows[2]["error"] is None
     # more images after the survey's own: only they are searched
@@ -245,9 +247,12 @@ def test_interrupted_run_continues(scenes, cluster, tmp_path, monkeypatch, capsy
         survey_detect(_pattern(scenes), inputs, out, scheduler=cluster.scheduler_address,
                       batch_size=1, progress=False, on_batch=stop)
     assert not (out / "images.parquet").exists()
-    assert json.loads((out / "survey.json").read_text())["state"] == "running"
     kept = sum(pq.read_table(p).num_rows for p in (out / "parts").glob("images-*.parquet"))
     assert kept == 5
+    # survey.json says the run stopped (it said "running" with no run left)
+    manifest = json.loads((out / "survey.json").read_text())
+    assert manifest["state"] == "stopped"
+    assert manifest["stopped"]["why"] == "interrupted" and manifest["stopped"]["images_done"] == 5
     # the command line says what was kept, in its one line
     def interrupted(*a, **k):
         raise KeyboardInterrupt

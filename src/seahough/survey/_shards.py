@@ -4,7 +4,7 @@ the two Parquet files made from them.
 Layout of ``OUT``::
 
     survey.json          the manifest: settings, the inputs' count and hash,
-                         state ("running" or "complete") and counts
+                         state ("running", "stopped" or "complete") and counts
     images.parquet       one row per input image  (written when all are done)
     detections.parquet   one row per detection    (written when all are done)
     parts/inputs.parquet the input list (index, path), to name a difference
@@ -169,9 +169,35 @@ class SurveyFolder:
     def __enter__(self):
         return self
 
-    def __exit__(self, *exc):
-        self._run.release()
+    def __exit__(self, exc_type, exc, tb):
+        try:
+            if exc_type is not None:
+                self._stopped(exc_type)
+        finally:
+            self._run.release()
         return False
+
+    def _stopped(self, exc_type) -> None:
+        """A run that ends by an exception (Ctrl-C, SIGTERM, a worker's
+        failure) leaves its manifest saying so: state "stopped", when, why
+        and how many images are done (it said "running" with no run left).
+        Nothing here may hide the exception itself."""
+        if self._record.get("state") != "running" or not self.manifest.is_file():
+            return
+        why = ("interrupted" if issubclass(exc_type, KeyboardInterrupt) else
+               "terminated" if exc_type.__name__ == "_Terminated" else
+               f"stopped by an error ({exc_type.__name__})")
+        try:
+            done = len(self.done())
+        except Exception:      # (a shard that cannot be read: the count unknown)
+            done = None
+        self._record.update(state="stopped", stopped={
+            "at": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            "why": why, "images_done": done})
+        try:
+            self._write_manifest()
+        except WriteError:
+            pass
 
     # ------------------------------------------------------------- manifest
     def _read_manifest(self) -> dict | None:
@@ -264,6 +290,7 @@ class SurveyFolder:
             self.moved = os.path.abspath(rec.get("cwd") or os.getcwd()) != os.getcwd()
             if grown:   # the images added are searched, the survey is running again
                 rec["inputs"] = {"count": len(paths), "hash": _digest(absolute)}
+            if grown or rec.get("state") == "stopped":
                 self._running_again()
         else:
             self._record = {
@@ -316,6 +343,7 @@ class SurveyFolder:
         longer hold every image, removed (the shards hold every row)."""
         self._record.update(state="running", counts=None, files={})
         self._record.pop("finished", None)
+        self._record.pop("stopped", None)
         self._write_manifest()
         for p in (self.images, self.detections):
             self._remove(p)
