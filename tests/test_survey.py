@@ -602,3 +602,32 @@ def test_a_workers_warning_names_the_file_on_one_line(tmp_path, capsys, monkeypa
     assert err.startswith(f"seahough: warning: {p}: a 16-bit image whose values reach only "
                           "4000"), err
     assert err.count("\n") == 1
+
+
+def test_images_say_what_was_left_out_and_why_nothing_was_found(cluster, tmp_path):
+    """images.parquet: ``left_out`` (more objects than max_results) and, for an
+    image where nothing was found, the best candidate and why it was declined
+    (a survey manager's question over thousands of photos: found nothing,
+    or found something not good enough?)."""
+    rng = np.random.default_rng(3)
+    many = np.full((240, 320), 60, np.uint8)
+    for x, y in ((60, 60), (200, 60), (60, 170), (200, 170)):
+        cv2.rectangle(many, (x, y), (x + 60, y + 40), 200, -1)
+    bare = cv2.GaussianBlur(rng.uniform(0, 255, (240, 320)).astype(np.uint8), (0, 0), 2)
+    paths = [str(tmp_path / "many.png"), str(tmp_path / "bare.png")]
+    cv2.imwrite(paths[0], many)
+    cv2.imwrite(paths[1], bare)
+    det = seahough.Detector(seahough.Pattern.rectangle(60, 40), (0.8, 1.25), max_results=1)
+    r = survey_detect(det, paths, tmp_path / "out", scheduler=cluster.scheduler_address,
+                      progress=False)
+    rows = _check_once(r, 2)
+    assert rows[0]["status"] == "found" and rows[0]["left_out"] >= 2, rows[0]
+    assert rows[0]["left_out"] == det.search(many).left_out
+    assert rows[0]["best_score"] is None and rows[0]["declined"] is None
+    assert rows[1]["status"] == "not found" and rows[1]["left_out"] == 0
+    # the same candidate, score and reason as the search in this process
+    from seahough.core.ranking import best_declined
+    best = best_declined(det.search(bare))
+    assert best is not None
+    assert rows[1]["best_score"] == pytest.approx(best.score)
+    assert rows[1]["declined"] == best.declined and rows[1]["declined"]

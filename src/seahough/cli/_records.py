@@ -90,16 +90,6 @@ def _captions(res) -> list:
     return [[c.x0, c.y0, c.x1, c.y1] for c in b.captions] if b is not None else []
 
 
-def best_declined(res):
-    """The best-scoring candidate of a search that was not reported (not
-    merely a repeat of a better one), or None: what a user tunes by."""
-    cands = [c for c in getattr(res, "candidates", None) or ()
-             if c.declined and not c.declined.startswith("the same object")]
-    # (a candidate finished at full resolution before one cut at the coarse scale:
-    # their scores are not measured alike)
-    return max(cands, key=lambda c: (c.full is not None, c.score)) if cands else None
-
-
 def _best_declined_dict(c) -> dict | None:
     if c is None:
         return None

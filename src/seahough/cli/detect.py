@@ -16,6 +16,7 @@ import click
 
 from ..config import Config
 from ..core.detector import FLAG_GREY, Detector
+from ..core.ranking import best_declined
 from ..errors import SeahoughError
 from ..io.frames import (IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, FrameReader, list_frames, printable,
                          split_video_ref)
@@ -24,7 +25,7 @@ from ._common import (CurveSearch, _Output, _dumps, _max_nfa_callback, _out_dir,
                       ignore_boxes, make_detector, workers_option)
 from ._records import (CSV_COLUMNS, _best_declined_dict, _best_declined_line, _csv_line,
                        _captions, _csv_rows, _detection_lines, _frame, _ignored,
-                       best_declined, error_row, patterns_not_found)
+                       error_row, patterns_not_found)
 
 # the command's defaults are the library's, so that both give the same results
 _DET = {k: v.default for k, v in inspect.signature(Detector.__init__).parameters.items()}

@@ -557,3 +557,13 @@ def to_detection(ctx: SearchContext, c: Candidate, conf: float, shape) -> Detect
         flags.append(FLAG_RANGE_EDGE)
     return Detection(float(x), float(y), float(s), float(a), float(c.full.score), conf,
                      m, outline, c.votes, kind, la, lo, tuple(flags), c.evidence.nfa)
+
+
+def best_declined(res):
+    """The best-scoring candidate of a search that was not reported (not
+    merely a repeat of a better one), or None: what a user tunes by."""
+    cands = [c for c in getattr(res, "candidates", None) or ()
+             if c.declined and not c.declined.startswith("the same object")]
+    # (a candidate finished at full resolution before one cut at the coarse scale:
+    # their scores are not measured alike)
+    return max(cands, key=lambda c: (c.full is not None, c.score)) if cands else None

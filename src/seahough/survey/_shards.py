@@ -33,6 +33,7 @@ from __future__ import annotations
 import datetime
 import hashlib
 import json
+import math
 import os
 from pathlib import Path
 
@@ -54,8 +55,10 @@ __all__ = ["SurveyFolder", "IMAGES_SCHEMA", "DETECTIONS_SCHEMA", "image_row", "F
 #: Bumped when the files' layout or columns change (2: detections get
 #: ``nfa``, and the settings ``max_nfa``; a survey of format 1 was made
 #: without either and is not continued; 3: detections get ``pattern``, the
-#: name of the pattern of a Detector of several).
-FORMAT = 3
+#: name of the pattern of a Detector of several; 4: images get ``left_out``
+#: and the best candidate not reported, ``best_score``, ``best_nfa``,
+#: ``declined``).
+FORMAT = 4
 MANIFEST = "survey.json"
 IMAGES = "images.parquet"
 DETECTIONS = "detections.parquet"
@@ -72,6 +75,9 @@ IMAGES_SCHEMA = pa.schema([
     ("height", pa.int32()),
     ("note", pa.string()),          # why the search could not run ("" when it ran)
     ("error", pa.string()),         # why the image could not be read (null when it could)
+    ("left_out", pa.int32()),       # candidates over min_score cut by max_results
+    # nothing found: the best candidate not reported, and why (else null)
+    ("best_score", pa.float64()), ("best_nfa", pa.float64()), ("declined", pa.string()),
 ])
 
 #: detections.parquet: one row per detection, best first within an image.
@@ -95,9 +101,16 @@ _DET_COLS = DETECTIONS_SCHEMA.names
 
 
 def image_row(index: int, path: str, status: str, n: int = 0, ms: float = 0.0,
-              width=None, height=None, note: str = "", error=None) -> tuple:
-    """One row of images.parquet, in :data:`IMAGES_SCHEMA` order."""
-    return (index, path, status, n, ms, width, height, note, error)
+              width=None, height=None, note: str = "", error=None, left_out: int = 0,
+              best=None) -> tuple:
+    """One row of images.parquet, in :data:`IMAGES_SCHEMA` order (``best``:
+    the best candidate not reported, a :class:`~seahough.core.candidates.Candidate`)."""
+    if best is None:
+        b = (None, None, None)
+    else:
+        b = (float(best.score), float(best.nfa) if math.isfinite(best.nfa) else None,
+             (f"{best.pattern}: " if best.pattern else "") + best.declined)
+    return (index, path, status, n, ms, width, height, note, error, left_out, *b)
 
 
 def _text(s):

@@ -33,6 +33,7 @@ from .._validate import number
 from ..config import config_record
 from ..core.detector import Detector
 from ..core.pattern import Pattern
+from ..core.ranking import best_declined
 from ..errors import (BitDepthWarning, LevelsWarning, ParameterError, SeahoughError,
                       without_name)
 from ._cluster import open_client
@@ -235,7 +236,8 @@ def search_batch(batch: list, detector: Detector) -> tuple[list, list]:
         h, w = img.shape[:2]
         found = res.detections
         rows.append(image_row(index, None, "found" if found else "not found", len(found), ms,
-                              int(w), int(h), res.note))
+                              int(w), int(h), res.note, left_out=res.left_out,
+                              best=None if found or res.note else best_declined(res)))
         for rank, d in enumerate(found, 1):
             m = [float(v) for v in d.matrix.ravel()]
             nfa = float(d.nfa) if math.isfinite(d.nfa) else None
