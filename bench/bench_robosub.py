@@ -524,7 +524,10 @@ def make_peer(task: str, method: str, p: dict):
 TOPS = (1, 2, 3, 5)
 NFAS = (1e-6, 1e-4, 1e-2, 1.0)
 QUANTILES = (*range(0, 100, 10), 95, 98, 99)
-PERMISSIVE = dict(top=8, min_score=0.3, max_nfa=1e3)     # seahough grid runs, filtered after
+# seahough grid runs, filtered after. At most 5 results: more is counting mode
+# (more key points, every candidate finished), not what the tuned row reruns
+# with (at most 5), so the grid would choose for a search it does not run.
+PERMISSIVE = dict(top=max(TOPS), min_score=0.3, max_nfa=1e3)
 
 
 def seahough_grid(task: str, quick: bool, colour: bool = False) -> list:
