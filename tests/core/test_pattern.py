@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import re
 
+import cv2
 import numpy as np
 import pytest
 
@@ -320,3 +321,30 @@ def test_a_long_lived_detector_keeps_bounded_memory_over_new_image_sizes():
     # (the first size's values were dropped long ago: computed again, the same answer)
     again = det.detect(img[100:300, 150:360])
     assert again == first and len(first) == 1
+
+
+def test_a_cut_out_with_transparent_pixels_takes_its_alpha_as_the_mask(tmp_path):
+    """A user's reference picture cut out with a transparent background: its
+    alpha channel is the mask (the background's edges were the pattern's)."""
+    rng = np.random.default_rng(1)
+    crop = cv2.GaussianBlur(rng.uniform(0, 255, (80, 120, 3)).astype(np.uint8), (0, 0), 1.5)
+    alpha = np.zeros((80, 120), np.uint8)
+    cv2.ellipse(alpha, (60, 40), (50, 30), 0, 0, 360, 255, -1)
+    bgra = np.dstack([crop, alpha])
+    cv2.imwrite(str(tmp_path / "cut.png"), bgra)
+    for image in (str(tmp_path / "cut.png"), bgra):
+        p = Pattern.from_image(image)
+        assert p.mask is not None and np.array_equal(p.mask, alpha > 0)
+    # all opaque: no mask; a mask given wins
+    assert Pattern.from_image(np.dstack([crop, np.full_like(alpha, 255)])).mask is None
+    box = np.zeros_like(alpha)
+    box[10:70, 10:110] = 1
+    assert np.array_equal(Pattern.from_image(bgra, mask=box).mask, box > 0)
+
+
+def test_a_pattern_file_without_edges_is_named_in_the_error(tmp_path):
+    """A script making patterns of many crops: which file had no edges."""
+    path = tmp_path / "flat.png"
+    cv2.imwrite(str(path), np.full((40, 40), 128, np.uint8))
+    with pytest.raises(PatternError, match=f"^{re.escape(str(path))}: the pattern has too few"):
+        Pattern.from_image(str(path))

@@ -141,10 +141,17 @@ class Pattern:
 
     def __init__(self, image, mask=None, origin=None, *, polarity="bright", kind="image",
                  outline=None, closed=True, edge_mask=None, config: Config | None = None):
-        gray, colour = _pio.grey_and_colour(image, bit_depth=None if config is None
-                                            else config.bit_depth)
-        self._setup(gray, mask, origin, polarity, kind, outline, closed, edge_mask, config,
-                    colour)
+        gray, colour, alpha, path = _pio.grey_and_colour(
+            image, bit_depth=None if config is None else config.bit_depth)
+        if mask is None and kind == "image":
+            mask = alpha      # (a cut-out: its transparent pixels are not the object)
+        try:
+            self._setup(gray, mask, origin, polarity, kind, outline, closed, edge_mask, config,
+                        colour)
+        except PatternError as e:   # (a script making patterns of many files: which one)
+            if path is None or str(e).startswith(path):
+                raise
+            raise PatternError(f"{path}: {e}") from None
 
     def _setup(self, gray, mask, origin, polarity, kind, outline, closed, edge_mask, config,
                colour=None):
@@ -198,7 +205,7 @@ class Pattern:
         #: (Config.pattern_blur).
         self.is_photo = kind == "image"
         if outline is None:
-            outline = self._outline_from_mask()
+            outline = _pio.outline_from_mask(self.mask, gray.shape)
         self.outline = [np.asarray(o, float).reshape(-1, 2) for o in outline]
         self.closed = closed
         self._edge_mask = edge_mask if edge_mask is not None else (
@@ -226,7 +233,9 @@ class Pattern:
             grey ones otherwise: :meth:`in_colour`).
         mask : path or ndarray, optional
             Non-zero on the object's pixels; edges outside it (dilated by two
-            pixels, so the object's border counts) are ignored.
+            pixels, so the object's border counts) are ignored. Default: a
+            BGRA image's alpha, when some pixels are transparent (a cut-out:
+            its border's contrast is against the pixels under them).
         origin : (x, y), optional
             Pattern origin in its pixel coordinates; default the image centre.
         polarity : {"same", "inverted", "either"}
@@ -314,15 +323,6 @@ class Pattern:
     polyline = classmethod(_shapes.polyline)
 
     # ------------------------------------------------------------ description
-    def _outline_from_mask(self):
-        h, w = self.image.shape
-        if self.mask is None:
-            return [np.array([(0, 0), (w - 1, 0), (w - 1, h - 1), (0, h - 1)], float)]
-        cs, _ = cv2.findContours(self.mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-        cs = sorted(cs, key=cv2.contourArea, reverse=True)
-        return [c.reshape(-1, 2).astype(float) for c in cs[:4]] or [
-            np.array([(0, 0), (w - 1, 0), (w - 1, h - 1), (0, h - 1)], float)]
-
     @functools.cached_property
     def extent(self) -> float:
         """Size of the object in pattern pixels (diagonal of its outline's box)."""

@@ -8,6 +8,7 @@ import zipfile
 import zlib
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from ..config import Config
@@ -19,16 +20,36 @@ FILE_VERSION = 1
 
 
 def grey_and_colour(image, name: str = "pattern", bit_depth: int | None = None):
-    """``(grey, colour)``: a pattern image (path or array) as :func:`to_gray`
-    makes it, and as BGR float32 levels (:func:`to_image`) when it has colour
-    (else None); a 16-bit one read as ``bit_depth``-bit data
-    (:attr:`Config.bit_depth`). A file is read once."""
+    """``(grey, colour, alpha, name)``: a pattern image (path or array) as
+    :func:`to_gray` makes it, as BGR float32 levels (:func:`to_image`) when
+    it has colour (else None), the pixels its alpha channel keeps (a BGRA
+    image with some transparent pixels: alpha > 0; else None), and the
+    file's name (None for an array); a 16-bit one read as ``bit_depth``-bit
+    data (:attr:`Config.bit_depth`). A file is read once."""
+    path = None
     if isinstance(image, (str, os.PathLike)):
-        name = str(image)
+        name = path = str(image)
         image = read_image(image)
+    alpha = None
+    if isinstance(image, np.ndarray) and image.ndim == 3 and image.shape[2] == 4:
+        a = image[..., 3]
+        if a.min() < a.max():
+            alpha = a > 0
     colour = to_image(image, True, name=name, bit_depth=bit_depth)
     return (to_gray(image, name=name, bit_depth=bit_depth),
-            (colour if colour.ndim == 3 else None))
+            (colour if colour.ndim == 3 else None), alpha, path)
+
+
+def outline_from_mask(mask, shape) -> list:
+    """A pattern's outline: the largest outer contours of its ``mask`` (up to
+    4), or its image's frame when it has none."""
+    h, w = shape
+    box = [np.array([(0, 0), (w - 1, 0), (w - 1, h - 1), (0, h - 1)], float)]
+    if mask is None:
+        return box
+    cs, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    cs = sorted(cs, key=cv2.contourArea, reverse=True)
+    return [c.reshape(-1, 2).astype(float) for c in cs[:4]] or box
 
 
 def save(p, path) -> Path:
