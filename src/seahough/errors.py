@@ -72,15 +72,18 @@ class LevelsWarning(UserWarning):
 
 def without_name(exc: BaseException, name) -> str:
     """The message of ``exc`` without a leading copy of the file ``name``
-    (for a line that already starts with it).
+    (for a line that already starts with it), nor of ``image``, the name an
+    array read from it was checked under.
 
     >>> without_name(ImageReadError("a.png: not an image"), "a.png")
     'not an image'
+    >>> without_name(ImageSizeError("image: 968x5 is too small"), "strip.png")
+    '968x5 is too small'
     """
     from pathlib import Path
 
     msg = str(exc)
-    for prefix in (f"{name}: ", f"{Path(name)}: "):
+    for prefix in (f"{name}: ", f"{Path(name)}: ", "image: "):
         if msg.startswith(prefix):
             return msg[len(prefix):]
     return msg
