@@ -20,6 +20,7 @@ from __future__ import annotations
 import concurrent.futures as cf
 import json
 import os
+import re
 import resource
 import struct
 import subprocess
@@ -282,6 +283,8 @@ BAD_ARGS = [
      ["--scale-range"]),
     ("angle_range reversed", ["pattern.png", "scene.png", "--angle-range", 10, 5],
      ["--angle-range", "LOW must not exceed HIGH"]),
+    ("angle_range across 0", ["pattern.png", "scene.png", "--angle-range", 350, 10],
+     ["--angle-range", "LOW must not exceed HIGH", "'350 370' or '-10 10'"]),
     ("angle_range NaN", ["pattern.png", "scene.png", "--angle-range", 0, "nan"],
      ["--angle-range", "finite"]),
     ("max_results 0", ["pattern.png", "scene.png", "--max-results", 0], ["--max-results"]),
@@ -680,6 +683,15 @@ def test_far_pattern_origin_does_not_crash(cli_runs):
 
 
 # ---------------------------------------------------- parameters: the API
+def test_a_rotation_range_across_north_says_how_to_give_it():
+    """(350, 10), "about north": refused, with the two ways to say it."""
+    with pytest.raises(ParameterError, match=re.escape("(350, 370) or (-10, 10)")):
+        Detector(Pattern.rectangle(40, 30), angle_range=(350, 10))
+    with pytest.raises(ParameterError) as info:     # (no such hint for scales)
+        Detector(Pattern.rectangle(40, 30), scale_range=(2, 1))
+    assert "turns" not in str(info.value)
+
+
 @pytest.mark.parametrize("kw", [
     dict(scale_range=(-1, 2)), dict(scale_range=(1, float("inf"))), dict(scale_range=(0.01, 10)),
     dict(scale_range=None), dict(scale_range="ab"), dict(scale_range=(1,)),

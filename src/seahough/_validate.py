@@ -59,8 +59,17 @@ def pair(name: str, value) -> tuple[float, float]:
     a = number(f"{name}[0]", items[0])
     b = number(f"{name}[1]", items[1])
     if b < a:
-        raise ParameterError(f"{name}={value!r}: low must be <= high")
+        raise ParameterError(f"{name}={value!r}: low must be <= high{_turn_hint(name, a, b)}")
     return a, b
+
+
+def _turn_hint(name: str, a: float, b: float, form: str = "({}, {})") -> str:
+    """For a rotation range given across 0 (350, 10): how to say it (each
+    pair in ``form``)."""
+    if "angle" not in name or not (0 <= b < a < 360):
+        return ""
+    return (f" (the turns from {a:g} through 0 to {b:g} degrees are "
+            f"{form.format(f'{a:g}', f'{b + 360:g}')} or {form.format(f'{a - 360:g}', f'{b:g}')})")
 
 
 def default_workers() -> int:

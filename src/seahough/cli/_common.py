@@ -12,7 +12,7 @@ from pathlib import Path
 
 import click
 
-from .._validate import default_workers, number
+from .._validate import _turn_hint, default_workers, number
 from .._values import json_safe
 from ..errors import ParameterError, SeahoughError, interrupted, without_name
 
@@ -158,7 +158,8 @@ def _range_callback(positive: bool):
         if not (math.isfinite(lo) and math.isfinite(hi)):
             raise click.BadParameter(f"{flag}: values must be finite")
         if lo > hi:
-            raise click.BadParameter(f"{flag}: LOW must not exceed HIGH")
+            hint = _turn_hint("angle", lo, hi, "'{} {}'") if not positive else ""
+            raise click.BadParameter(f"{flag}: LOW must not exceed HIGH{hint}")
         if positive and lo <= 0:
             raise click.BadParameter(f"{flag}: scales must be > 0")
         return float(lo), float(hi)
