@@ -18,7 +18,17 @@ dtu_seabed_pair/scene2.png and aqualoc_amphorae_wreck/frame_040.png. Frames
 are the photo at 1280 px wide and at its own size (1920x1080; the wreck
 968x608 and 1280x804).
 
-    python bench/bench_small_patch.py --write   # docs/small_patch.md (~3 min)
+A second table: **medium patches at unknown scale** (64-128 px patches of
+frames 384 and 640 px wide, a quarter to a third of the frame: a user's crop
+of one photo searched in the next), searched with ``Detector(Pattern(patch))``
+at its defaults (scale 0.5-2, full turn), the view turned and rescaled as
+above. Compared: the rule before 2026-12-07, key points added only when the
+default put fewer than 16 on the patch (``core.detector.MIN_ON_PATTERN =
+16``; a 96 px patch of a 384x288 Sparus frame, 25 there, was missed in that
+very frame), and SIFT. Its tune part adds the Sparus frames 0, 10 and 20
+(sparus_auv_seabed) to the tune photos; its test part is the test photos'.
+
+    python bench/bench_small_patch.py --write   # docs/small_patch.md (~5 min)
     python bench/bench_small_patch.py --quick   # a smoke run (~20 s)
 """
 
@@ -64,13 +74,13 @@ def photos(name: str):
     return [small, img]
 
 
-def _seahough(patch, scene, density):
-    old = D.TEXTURE_DENSITY
-    D.TEXTURE_DENSITY = density
+def _seahough(patch, scene, density, scale_range=(0.85, 1.15), min_on=None):
+    old = D.TEXTURE_DENSITY, D.MIN_ON_PATTERN
+    D.TEXTURE_DENSITY, D.MIN_ON_PATTERN = density, min_on
     try:
-        d = seahough.Detector(seahough.Pattern(patch), scale_range=(0.85, 1.15)).detect(scene)
+        d = seahough.Detector(seahough.Pattern(patch), scale_range=scale_range).detect(scene)
     finally:
-        D.TEXTURE_DENSITY = old
+        D.TEXTURE_DENSITY, D.MIN_ON_PATTERN = old
     return None if not d else (d[0].x, d[0].y)
 
 
@@ -83,15 +93,36 @@ def _sift(patch, scene):
     return tuple(r.matrix[:, :2] @ c + r.matrix[:, 2])
 
 
-def cases(name: str, part: str, n: int, sides):
+MEDIUM_TUNE = TUNE + tuple(f"sequences/sparus_auv_seabed/frame_{k:03d}.png" for k in (0, 10, 20))
+MEDIUM_METHODS = ("seahough", "seahough, key points added under 16 (before)", "SIFT+RANSAC")
+
+
+def medium_photos(name: str):
+    """The frames of a photo for the medium patches: 640 and 384 px wide
+    (a Sparus frame: its own 384x288)."""
+    if name == "procedural":
+        return [sim.seabed((480, 640), seed=21), sim.seabed((288, 384), seed=22)]
+    img = cv2.imread(str(shared_data_dir() / name), cv2.IMREAD_COLOR)
+    h, w = img.shape[:2]
+    if w <= 384:
+        return [img]
+    return [cv2.resize(img, (wide, round(h * wide / w)), interpolation=cv2.INTER_AREA)
+            for wide in (640, 384)]
+
+
+def cases(name: str, part: str, n: int, sides, frames=photos, margin: float = 1.0):
+    """Patches ``margin`` sides or more from the frame's border (too large a
+    patch for the frame is skipped), each with a turned and rescaled view."""
     rng = np.random.default_rng(zlib.crc32(name.encode()))
-    for frame in photos(name):
+    for frame in frames(name):
         h, w = frame.shape[:2]
         for side in sides:
+            if min(h, w) <= (1 + 2 * margin) * side:
+                continue
             for k in range(n):
                 for _ in range(50):   # (a patch with no edges to find is not a case)
-                    x = int(rng.uniform(side, w - 2 * side))
-                    y = int(rng.uniform(side, h - 2 * side))
+                    x = int(rng.uniform(margin * side, w - (1 + margin) * side))
+                    y = int(rng.uniform(margin * side, h - (1 + margin) * side))
                     try:
                         seahough.Pattern(frame[y:y + side, x:x + side])
                         break
@@ -123,6 +154,21 @@ def measure(case, patch, scene) -> dict:
     return dict(case, res=out)
 
 
+def measure_medium(case, patch, scene) -> dict:
+    out = {}
+    fns = {"seahough": lambda: _seahough(patch, scene, D.TEXTURE_DENSITY, (0.5, 2.0)),
+           MEDIUM_METHODS[1]: lambda: _seahough(patch, scene, D.TEXTURE_DENSITY, (0.5, 2.0), 16),
+           "SIFT+RANSAC": lambda: _sift(patch, scene)}
+    for name, fn in fns.items():
+        t = time.process_time()
+        r = fn()
+        ms = 1000 * (time.process_time() - t)
+        err = math.inf if r is None else math.hypot(r[0] - case["truth"][0],
+                                                     r[1] - case["truth"][1])
+        out[name] = dict(answered=r is not None, err=err, ms=ms)
+    return dict(case, res=out)
+
+
 def _cells(recs, method):
     n = len(recs)
     found = sum(r["res"][method]["err"] <= GOOD_PX for r in recs)
@@ -131,7 +177,31 @@ def _cells(recs, method):
     return [f"{found}/{n} ({100 * found / max(n, 1):.0f} %)", str(wrong), f"{ms:.0f}"]
 
 
-def page(recs, seconds: float, quick: bool) -> str:
+def medium_table(recs) -> list:
+    """The medium patches' table: by part, frame width and patch size, then totals."""
+    lines = ["", "## Medium patches at unknown scale", "",
+             "64-128 px patches of frames 640 and 384 px wide, `Detector(Pattern(patch))` at "
+             "its defaults (scale 0.5-2, any rotation); the view turned and rescaled by 0.9-1.1. "
+             "Tune part: " + ", ".join(MEDIUM_TUNE) + "; test part: " + ", ".join(TEST) + ".",
+             "", "| part | frame width | patch px | method | found | wrong | median CPU ms |",
+             "|---|---|---|---|---|---|---|"]
+    for part in ("test", "tune"):
+        for wide in ("640", "384"):
+            for side in SIDES:
+                sub = [r for r in recs if r["part"] == part and r["side"] == side
+                       and r["frame"].startswith(wide + "x")]
+                for method in MEDIUM_METHODS if sub else ():
+                    lines.append("| " + " | ".join([part, wide, str(side), method]
+                                                   + _cells(sub, method)) + " |")
+    lines += ["", "| part | method | found | wrong | median CPU ms |", "|---|---|---|---|---|"]
+    for part in ("test", "tune"):
+        sub = [r for r in recs if r["part"] == part]
+        for method in MEDIUM_METHODS if sub else ():
+            lines.append("| " + " | ".join([part, method] + _cells(sub, method)) + " |")
+    return lines
+
+
+def page(recs, seconds: float, quick: bool, medium=()) -> str:
     lines = page_head("A small seabed patch in a large frame", seconds)
     lines += ["Split by photo: tune part = " + ", ".join(TUNE) + "; test part = "
              + ", ".join(TEST) + ". How the cases are made: bench/bench_small_patch.py's "
@@ -159,6 +229,8 @@ def page(recs, seconds: float, quick: bool) -> str:
         for method in METHODS:
             if sub:
                 lines.append("| " + " | ".join([part, method] + _cells(sub, method)) + " |")
+    if medium:
+        lines += medium_table(medium)
     return "\n".join(lines) + "\n"
 
 
@@ -175,7 +247,13 @@ def main(argv=None) -> int:
         jobs = [jobs[0], jobs[2]]
     recs = [measure(c, patch, scene)
             for p, part in jobs for c, patch, scene in cases(p, part, n, sides)]
-    text = page(recs, time.time() - t0, args.quick)
+    mjobs = [(p, "tune") for p in MEDIUM_TUNE] + [(p, "test") for p in TEST]
+    if args.quick:
+        mjobs = [mjobs[2], mjobs[-1]]
+    medium = [measure_medium(c, patch, scene) for p, part in mjobs
+              for c, patch, scene in cases(p, part, 1 if args.quick else 4, sides,
+                                           medium_photos, 0.5)]
+    text = page(recs, time.time() - t0, args.quick, medium)
     publish(text, args, DOC)
     return 0
 

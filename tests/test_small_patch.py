@@ -5,6 +5,7 @@ import math
 
 import cv2
 import numpy as np
+import pytest
 
 import seahough
 import seahough.core.detector as D
@@ -51,10 +52,14 @@ def test_only_small_texture_patterns_take_more_key_points():
     large = seahough.Detector(seahough.Pattern(sim.seabed((480, 640), seed=3)[:300, :400]),
                               scale_range=(0.85, 1.15))
     assert large._n_keypoints(frame, 0.25) is None
-    # (a 120 px patch in a 640x480 view: about 28 of the 1,200 fall on it already)
-    fragment = seahough.Detector(seahough.Pattern(sim.seabed((480, 640), seed=3)[:120, :120]),
-                                 scale_range=(0.7, 1.4))
-    assert fragment._n_keypoints((480, 640), 0.5) is None
+    # a 96 px patch of a 384x288 frame at the default scales (a user's crop
+    # searched in the next frame): 25 of the 1,200 fell on it at scale 0.5, and
+    # it was missed in its own frame; now a quarter of its 256 voting points
+    medium = seahough.Detector(seahough.Pattern(sim.seabed((288, 384), seed=3)[:96, :96]))
+    n = medium._n_keypoints((288, 384), 320 / 384)
+    share = 96 * 96 * 0.5 ** 2 / (288 * 384)
+    assert n * share == pytest.approx(D.TEXTURE_DENSITY * medium.config.n_pattern_points, rel=0.01)
+    # (a 300 x 400 patch of a 1280x720 frame: 112 fall on it already)
     shape = seahough.Detector(seahough.Pattern.rectangle(40, 24), scale_range=(0.85, 1.15))
     assert shape._n_keypoints(frame, 0.25) is None
     assert seahough.Detector(seahough.Pattern.from_frame(patch))._n_keypoints(frame, 0.25) is None
@@ -62,3 +67,16 @@ def test_only_small_texture_patterns_take_more_key_points():
     mine = seahough.Detector(seahough.Pattern(patch), scale_range=(0.85, 1.15),
                              config=seahough.Config(n_keypoints=300))
     assert mine._n_keypoints(frame, 0.25) is None
+
+
+def test_a_users_crop_is_found_in_the_frame_it_came_from():
+    """A new user's first try (96 px of a real 384x288 Sparus frame, searched
+    at the defaults in that very frame): "not found" while 25 key points fell
+    on it; with a quarter of its voting points there, found where it was cut."""
+    from conftest import data_path
+
+    frame = cv2.imread(str(data_path("sequences", "sparus_auv_seabed", "frame_005.png")))
+    found = seahough.Detector(seahough.Pattern.from_image(frame[100:196, 150:246])).detect(frame)
+    assert found, "not found in its own frame"
+    assert math.hypot(found[0].x - 197.5, found[0].y - 147.5) < 1.0
+    assert found[0].scale == pytest.approx(1.0, abs=0.01)

@@ -43,12 +43,12 @@ __all__ = ["Detector", "SearchResult", "SEARCH_NOTES", "Detection", "confidence"
 #: count follows ``Config.n_pattern_points``: a Config with 128 of them now
 #: takes half the key points it took with 128 before.
 TEXTURE_DENSITY = 0.25
-#: ... up to this many (the voting cost grows with them), when the default
-#: count would put fewer than MIN_ON_PATTERN key points on its area. (More key
-#: points everywhere made the simulated fragments, 120-200 px patches in
-#: 640x480 views with about 28 on their area, lose one of 50: 96 -> 94 %.)
+#: ... up to this many (the voting cost grows with them), whenever the default
+#: puts fewer there; MIN_ON_PATTERN, if set, only under that many (16 until
+#: 2026-12-07: a 96 px patch of a 384x288 frame, 25 there, was missed in that
+#: very frame; bench/bench_small_patch.py's medium patches, fragments 94 -> 98 %).
 MAX_KEYPOINTS = 20_000
-MIN_ON_PATTERN = 16
+MIN_ON_PATTERN: int | None = None
 #: A search for more than 5 results takes this many key points for each (the
 #: default's 1,200 are 240 for each of 5), up to :data:`MAX_KEYPOINTS`, unless
 #: its Config sets ``n_keypoints``: a seabed's texture holds most of the
@@ -423,7 +423,7 @@ class Detector:
         of the 1,200, and it was found 1 time in 6. Such a search takes
         enough for :data:`TEXTURE_DENSITY` times the pattern's own points to
         fall on its area, at most :data:`MAX_KEYPOINTS`, when the default
-        would put fewer than :data:`MIN_ON_PATTERN` there (shapes keep the
+        would put fewer there (shapes keep the
         default: their borders are among the most contrasted edges). A
         Config whose ``n_keypoints`` is not the default's is the user's
         choice, and is kept (a texture patch found less often, faster).
@@ -446,7 +446,7 @@ class Detector:
         ph, pw = p.image.shape[:2]
         h, w = shape[:2]
         share = (pw * ph * self.scale_range[0] ** 2) / float(w * h)
-        if cfg.n_keypoints * share >= MIN_ON_PATTERN:
+        if MIN_ON_PATTERN is not None and cfg.n_keypoints * share >= MIN_ON_PATTERN:
             return None
         want = TEXTURE_DENSITY * cfg.n_pattern_points / max(share, 1e-9)
         if want <= cfg.n_keypoints:
