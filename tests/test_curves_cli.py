@@ -54,6 +54,16 @@ def test_detect_curve_nothing_there_and_bad_specs(tmp_path, capsys):
         assert _cli(["detect", spec, str(flat)]) == 2
         err = capsys.readouterr().err
         assert "curve:WIDTH" in err and "Traceback" not in err
+    for spec in ("curve:0", "curve:-8"):      # (the width named, as the API names it)
+        assert _cli(["detect", spec, str(flat)]) == 2
+        assert "width=" in capsys.readouterr().err
+    # a polyline's points: what they lack (was the generic syntax alone)
+    for spec, words in (("polyline:6:0,100", "at least 2 (x, y) points"),
+                        ("polyline:6:0,100,0", "an odd count"),
+                        ("polyline:6:0,0,100,0,0,0", "turns back on itself")):
+        assert _cli(["detect", spec, str(flat)]) == 2
+        err = capsys.readouterr().err
+        assert words in err and "Traceback" not in err, err
     assert _cli(["detect", "curve:8", str(flat), "--mask", str(flat)]) == 2
     assert "--mask" in capsys.readouterr().err
     # a shape's bad spec says its own problem, not the curve's syntax (a slip once added it)

@@ -984,3 +984,15 @@ def test_a_line_s_cross_is_on_the_segment_the_image_shows():
     (cross,) = [ln for ln in fig.axes[0].lines if ln.get_marker() == "+"]
     x, y = (float(v[0]) for v in cross.get_data())
     assert 145 <= x <= 165 and 5 <= y <= 95, (x, y)
+
+
+def test_a_list_of_other_things_is_a_parameter_error_naming_it():
+    """plot_detections(img, [1, 2]) was an AttributeError deep in the drawing."""
+    from seahough.errors import ParameterError
+    from seahough.viz import plot_curves, plot_detections
+
+    img = np.zeros((60, 80), np.uint8)
+    with pytest.raises(ParameterError, match="detections: expected Detection objects"):
+        plot_detections(img, [1, 2])
+    with pytest.raises(ParameterError, match="curves: expected Curve objects"):
+        plot_curves(img, [1, 2])

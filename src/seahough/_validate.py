@@ -107,3 +107,15 @@ def check_max_nfa(value) -> float:
     if isinstance(value, numbers.Real) and not isinstance(value, bool) and value == math.inf:
         return math.inf
     return number("max_nfa", value, lo=0.0, lo_open=True)
+
+
+def _a_list(name: str, value) -> None:
+    """``value`` is None or a list (filled by the call: ``declined=[]``).
+
+    >>> _a_list("declined", 5)
+    Traceback (most recent call last):
+    ...
+    seahough.errors.ParameterError: declined=5: expected a list to fill (e.g. declined=[]), or None
+    """
+    if value is not None and not isinstance(value, list):
+        raise ParameterError(f"{name}={value!r}: expected a list to fill (e.g. {name}=[]), or None")

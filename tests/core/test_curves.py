@@ -230,6 +230,7 @@ def test_the_image_features_are_computed_once(monkeypatch):
     (dict(max_curves=0), "max_curves"), (dict(max_curves=1.5), "max_curves"),
     (dict(config="fast"), "config"),
     (dict(max_nfa=0), "max_nfa"), (dict(max_nfa=-1), "max_nfa"),
+    (dict(declined=5), "declined"), (dict(declined=()), "declined"),
 ])
 def test_bad_parameters_name_themselves(kwargs, name):
     args = dict(width=8)

@@ -198,3 +198,15 @@ def test_cli_finds_a_gate_given_as_a_polyline_spec(tmp_path):
         assert r.returncode == 2 and r.stdout == "", r
         assert r.stderr.count("\n") == 1 and "Traceback" not in r.stderr
         assert "polyline:WIDTH:x1,y1" in r.stderr or "width=0.5" in r.stderr
+
+
+def test_points_that_are_not_pairs_or_turn_back_are_refused():
+    """(x, y, z) rows were flattened and re-paired into another polyline; a
+    U-turn, its two strips on each other, was searched (and "found" a rope)."""
+    with pytest.raises(ParameterError, match="expected \\(x, y\\) pairs"):
+        seahough.Pattern.polyline([(0, 0, 0), (10, 0, 0)], 6)
+    with pytest.raises(ParameterError, match="turns back on itself at point 1 \\(100, 0\\)"):
+        seahough.Pattern.polyline([(0, 0), (100, 0), (0, 0)], 6)
+    with pytest.raises(ParameterError, match="turns back"):
+        seahough.Pattern.polyline([(0, 0), (100, 0), (0, 5)], 6)
+    seahough.Pattern.polyline([(0, 0), (50, 8), (100, 0)], 6)       # (a sharp chevron is one)

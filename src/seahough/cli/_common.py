@@ -392,7 +392,7 @@ def _curve_spec(spec: str, rest: str) -> tuple:
     from ..core.curves import _check
 
     v = _numbers(rest, spec)
-    if not 1 <= len(v) <= 3 or not v[0] > 0:
+    if not 1 <= len(v) <= 3:
         raise click.BadParameter(f"{spec!r}: expected curve:WIDTH[,PIECE_LENGTH[,MIN_LENGTH]] "
                                  "(px, e.g. curve:8 or curve:8,40,60)",
                                  param_hint="PATTERN")
@@ -515,6 +515,13 @@ def parse_pattern(spec: str, polarity: str | None = None, mask: str | None = Non
             w = _numbers(width, spec)
             v = w + _numbers(rest, spec)
             ok = bool(sep2) and len(w) == 1 and len(v) >= 5 and len(v) % 2 == 1
+            if bool(sep2) and len(w) == 1 and not ok:   # (the width given: say what the points lack)
+                n = len(v) - 1
+                raise click.BadParameter(
+                    f"{spec!r}: points: {n} coordinates, " + (
+                        "an odd count (x, y pairs expected)" if n % 2 else
+                        "a polyline needs at least 2 (x, y) points") +
+                    f" ({_SHAPE_USAGE[kind]})", param_hint="PATTERN")
         else:
             v = _numbers(rest, spec)
             want = _SHAPE_COUNTS[kind]

@@ -64,7 +64,7 @@ from dataclasses import dataclass, field, replace
 import cv2
 import numpy as np
 
-from .._validate import check_max_nfa, number, pair
+from .._validate import _a_list, check_max_nfa, number, pair
 from .._values import ValueEquality
 from ..config import Config
 from ..errors import ParameterError
@@ -538,7 +538,7 @@ def find_curves(image, width, *, width_range=(0.5, 1.5), polarity="bright",
     """
     w, s_range, length, max_turn, max_curves = _check(width, width_range, polarity,
                                                       piece_length, max_turn, max_curves, config)
-    max_nfa = check_max_nfa(max_nfa)
+    max_nfa, _ = check_max_nfa(max_nfa), _a_list("declined", declined)
     min_len = (_MIN_PIECES * length if min_length is None
                else number("min_length", min_length, lo=0.0))
     cfg = Config() if config is None else config

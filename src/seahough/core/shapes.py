@@ -29,12 +29,19 @@ _FINE = 8
 _MAX_FINE = 8192
 
 
+#: The sharpest turn of a polyline, degrees (a chevron's tip of 10 degrees):
+#: beyond it the strips before and after lie on each other.
+MAX_TURN = 170.0
+
+
 def _points(points) -> np.ndarray:
     """The polyline's points as an (n, 2) float array, consecutive repeats
     dropped (a ParameterError naming ``points`` when there is no polyline)."""
     try:
-        pts = np.asarray(points, float).reshape(-1, 2)
+        pts = np.asarray(points, float)
     except (TypeError, ValueError):
+        pts = None
+    if pts is None or pts.ndim != 2 or pts.shape[1] != 2:   # ((x, y, z) rows were re-paired)
         raise ParameterError(f"points={points!r}: expected (x, y) pairs") from None
     if not np.isfinite(pts).all():
         raise ParameterError("points: the polyline's coordinates must be finite")
@@ -43,6 +50,14 @@ def _points(points) -> np.ndarray:
         pts = pts[np.r_[True, step > 1e-9]]
     if pts.shape[0] < 2:
         raise ParameterError("points: a polyline needs at least 2 distinct (x, y) points")
+    d = np.diff(pts, axis=0)
+    turn = np.degrees(np.abs(np.arctan2(d[:-1, 0] * d[1:, 1] - d[:-1, 1] * d[1:, 0],
+                                        (d[:-1] * d[1:]).sum(axis=1))))
+    if (turn > MAX_TURN).any():
+        i = int(np.argmax(turn > MAX_TURN)) + 1
+        raise ParameterError(f"points: the polyline turns back on itself at point {i} "
+                             f"({pts[i, 0]:g}, {pts[i, 1]:g}), by {turn[i - 1]:.0f} degrees (at "
+                             f"most {MAX_TURN:g}: its two strips would lie on each other)")
     return pts
 
 

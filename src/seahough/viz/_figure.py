@@ -30,7 +30,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from ..core.ranking import FLAG_ALONG_LINE
-from ..errors import WriteError
+from ..errors import ParameterError, WriteError
 from ..geometry import format_angle, format_line
 from ..io.images import read_image, to_bgr8, to_gray, write_bytes
 
@@ -52,6 +52,18 @@ TRUTH_COLOUR = "#c4c4c4"
 _OUTLINE = [patheffects.Stroke(linewidth=4.5, foreground="black", alpha=0.8), patheffects.Normal()]
 #: A black border around text drawn over an image or a plane.
 _TEXT_OUTLINE = [patheffects.withStroke(linewidth=3, foreground="black")]
+
+
+def _items(name: str, items, kind: str, attrs: tuple, source: str) -> list:
+    """``items`` as a list, each with the attributes ``attrs`` of a ``kind``
+    (a ParameterError naming ``name`` and what gives them, not an
+    AttributeError deep in the drawing)."""
+    out = list(items or [])
+    bad = next((v for v in out if not all(hasattr(v, a) for a in attrs)), None)
+    if bad is not None:
+        raise ParameterError(f"{name}: expected {kind} objects ({source}), got "
+                             f"{type(bad).__name__} {bad!r:.40}")
+    return out
 
 
 def _figure(width_px: int, height_px: int) -> Figure:

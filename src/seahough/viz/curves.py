@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from ._figure import COLOURS, _OUTLINE, _finish
+from ._figure import COLOURS, _OUTLINE, _finish, _items
 from .detections import _free_corners, _image_figure, _notes, _place_label
 
 
@@ -69,10 +69,10 @@ def plot_curves(image, curves, path=None, *, title=None, max_width=None,
     >>> tuple(int(v) for v in fig.get_size_inches() * fig.dpi)
     (1000, 775)
     """
+    curves = _items("curves", curves, "Curve", ("points", "width"), "from find_curves")
     fig, ax, _, _, (w, h), box = _image_figure(image, max_width, bit_depth)
     ax.set_xlabel("x (px)")
     ax.set_ylabel("y (px)")
-    curves = list(curves or [])
     items, anchors = [], []
     for i, c in enumerate(curves):
         col = COLOURS[i % len(COLOURS)]

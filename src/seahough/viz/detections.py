@@ -15,7 +15,7 @@ from matplotlib.offsetbox import AnchoredOffsetbox, TextArea, VPacker
 from ..config import Config
 from ..errors import ParameterError
 from ._figure import COLOURS, DPI, _OUTLINE, _TEXT_OUTLINE, _as_display, _det_label, _figure, \
-    _finish, _line_ends, _line_extent, _show, _text_size
+    _finish, _items, _line_ends, _line_extent, _show, _text_size
 from ._inset import _pattern_beside, _pattern_inset
 
 _IMAGE_BOX = 900        # longer side of an image drawn by plot_detections, px
@@ -538,13 +538,14 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
     >>> tuple(int(v) for v in fig.get_size_inches() * fig.dpi)
     (1000, 775)
     """
+    detections = _items("detections", detections, "Detection", ("x", "y", "kind", "outline"),
+                        "from Detector.detect")
     fig, ax, disp, colour, (w, h), (iw, ih) = _image_figure(image, max_width, bit_depth)
     gray = None
-    if any(d.kind == "line" for d in detections or []):
+    if any(d.kind == "line" for d in detections):
         gray = cv2.cvtColor(disp, cv2.COLOR_RGB2GRAY) if colour else disp
     ax.set_xlabel("x (px)")
     ax.set_ylabel("y (px)")
-    detections = list(detections or [])
     anchors = []
     left_out = [] if blanks is None else (
         [((c.x0, c.y0, c.x1, c.y1), c.side, "caption, not searched") for c in blanks.captions]
