@@ -626,7 +626,7 @@ def test_images_say_what_was_left_out_and_why_nothing_was_found(cluster, tmp_pat
     assert rows[0]["best_score"] is None and rows[0]["declined"] is None
     assert rows[1]["status"] == "not found" and rows[1]["left_out"] == 0
     # the same candidate, score and reason as the search in this process
-    from seahough.core.ranking import best_declined
+    from seahough.core.candidates import best_declined
     best = best_declined(det.search(bare))
     assert best is not None
     assert rows[1]["best_score"] == pytest.approx(best.score)

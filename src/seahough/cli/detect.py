@@ -16,7 +16,7 @@ import click
 
 from ..config import Config
 from ..core.detector import FLAG_GREY, Detector
-from ..core.ranking import best_declined
+from ..core.candidates import best_declined
 from ..errors import SeahoughError
 from ..io.frames import (IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, FrameReader, list_frames, printable,
                          split_video_ref)

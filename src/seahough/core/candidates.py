@@ -508,3 +508,13 @@ def find_candidates(ctx: SearchContext, votes: Votes) -> list:
         out.append(Candidate(fit, v, fit.score))
     out.sort(key=lambda c: -c.work_score)
     return out
+
+
+def best_declined(res):
+    """The best-scoring candidate of a search that was not reported (not
+    merely a repeat of a better one), or None: what a user tunes by."""
+    cands = [c for c in getattr(res, "candidates", None) or ()
+             if c.declined and not c.declined.startswith("the same object")]
+    # (a candidate finished at full resolution before one cut at the coarse scale:
+    # their scores are not measured alike)
+    return max(cands, key=lambda c: (c.full is not None, c.score)) if cands else None

@@ -33,7 +33,7 @@ from .._validate import number
 from ..config import config_record
 from ..core.detector import Detector
 from ..core.pattern import Pattern
-from ..core.ranking import best_declined
+from ..core.candidates import best_declined
 from ..errors import (BitDepthWarning, LevelsWarning, ParameterError, SeahoughError,
                       without_name)
 from ._cluster import open_client
