@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import types
 from pathlib import Path
 
@@ -996,3 +997,41 @@ def test_a_list_of_other_things_is_a_parameter_error_naming_it():
         plot_detections(img, [1, 2])
     with pytest.raises(ParameterError, match="curves: expected Curve objects"):
         plot_curves(img, [1, 2])
+
+
+def test_a_long_title_is_broken_to_fit_the_picture():
+    """A not-found picture's title says why, and ran off its right edge (a
+    user read "...under min_len")."""
+    from seahough.viz import plot_curves, plot_detections
+
+    img = np.zeros((480, 640), np.uint8)
+    why = ("empty.png: no curve found; best line: score 0.71, the rope followed from this "
+           "line is 24 px long, under min_length 96")
+    for fig in (plot_curves(img, [], title=why), plot_detections(img, [], title=why)):
+        ax = fig.axes[0]
+        t = ax.title if ax.title.get_text() else ax._left_title
+        assert "\n" in t.get_text() and t.get_text().replace("\n", " ") == why
+        bb = t.get_window_extent(fig.canvas.get_renderer())
+        assert bb.x1 <= fig.bbox.width and bb.y1 <= fig.bbox.height, bb
+    # one far too long: three lines, the last cut
+    fig = plot_detections(img, [], title=" ".join([why] * 5))
+    text = fig.axes[0]._left_title.get_text()
+    assert text.count("\n") == 2 and text.endswith("...")
+
+
+def test_a_curve_search_that_found_nothing_draws_its_best_line():
+    """The README says the best line a curve search started from is shown:
+    it was only named in the title."""
+    from types import SimpleNamespace
+
+    from seahough.geometry import Similarity
+    from seahough.viz import plot_curves
+
+    img = np.zeros((240, 320), np.uint8)
+    best = SimpleNamespace(pose=Similarity.from_params(160.0, 120.0, 1.0, math.radians(30.0)))
+    fig = plot_curves(img, [], best=best)
+    [line] = [ln for ln in fig.axes[0].lines if ln.get_linestyle() == ":"]
+    x, y = line.get_xdata(), line.get_ydata()
+    assert math.degrees(math.atan2(-(y[1] - y[0]), x[1] - x[0])) % 180 == pytest.approx(30, abs=1)
+    assert any(t.get_text() == "best line, no curve" for t in fig.axes[0].texts)
+    assert not [ln for ln in plot_curves(img, []).axes[0].lines if ln.get_linestyle() == ":"]

@@ -209,7 +209,7 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, draw: Dr
             head += f"; best line: score {near.score:.2f}, {near.declined}"
         if "overlay" in kinds:
             plot.plot_curves(img, dets, ov, title=head, max_width=max_width,
-                             bit_depth=detector.config.bit_depth)
+                             bit_depth=detector.config.bit_depth, best=near)
             written["overlay"] = str(ov)
         return
     if "overlay" in kinds:

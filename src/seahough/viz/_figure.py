@@ -74,6 +74,31 @@ def _figure(width_px: int, height_px: int) -> Figure:
     return fig
 
 
+def _set_title(fig: Figure, ax, title: str) -> None:
+    """``ax``'s title on the left, broken into lines that fit the figure
+    (a not-found picture's title says why, and ran off its right edge: a
+    user read "...under min_len"): two lines at 12 pt, else up to three at
+    10 pt, the last cut with an ellipsis beyond that."""
+    x0 = ax.get_position().x0 * fig.bbox.width
+    room = fig.bbox.width - x0 - 8.0
+    for size, most in ((12, 2), (10, 3)):
+        lines = [""]
+        for word in title.split(" "):
+            trial = f"{lines[-1]} {word}" if lines[-1] else word
+            if lines[-1] and _text_size(fig, trial, fontsize=size)[0] > room:
+                lines.append(word)
+            else:
+                lines[-1] = trial
+        if len(lines) <= most:
+            break
+    if len(lines) > most:
+        lines = lines[:most]
+        while len(lines[-1]) > 1 and _text_size(fig, lines[-1] + " ...", fontsize=size)[0] > room:
+            lines[-1] = lines[-1][:-1]
+        lines[-1] += " ..."
+    ax.set_title("\n".join(lines), fontsize=size, loc="left")
+
+
 def _text_size(fig: Figure, text: str, **props) -> tuple[float, float]:
     """``(width, height)`` in px of ``text`` drawn with ``props``."""
     t = fig.text(0, 0, text, **props)

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from ._figure import COLOURS, _OUTLINE, _finish, _items
+from ._figure import COLOURS, _OUTLINE, _finish, _items, _line_ends, _set_title
 from .detections import _free_corners, _image_figure, _notes, _place_label
 
 
@@ -31,7 +31,7 @@ def _curve_label(c) -> str:
 
 
 def plot_curves(image, curves, path=None, *, title=None, max_width=None,
-                bit_depth=None) -> Figure:
+                bit_depth=None, best=None) -> Figure:
     """The image with each curve's centre line and borders.
 
     Parameters
@@ -53,6 +53,10 @@ def plot_curves(image, curves, path=None, *, title=None, max_width=None,
         Default: how many curves were found.
     max_width, bit_depth : optional
         As :func:`~seahough.viz.plot_detections` takes them.
+    best : Candidate, optional
+        When no curve was found: the best line the search started from
+        (``find_curves(..., declined=[])``'s first), drawn dotted across
+        the image and labelled, so that one sees where it looked.
 
     Returns
     -------
@@ -85,6 +89,15 @@ def plot_curves(image, curves, path=None, *, title=None, max_width=None,
         anchors.append(p)
         _place_label(ax, f"#{i + 1}", p[0, 0], p[0, 1], col, w, h)
         items.append((f"#{i + 1}  " + _curve_label(c), col))
+    if best is not None and not curves:
+        q = best.pose
+        ends = _line_ends(q.tx, q.ty, q.angle, w, h)
+        if ends is not None:
+            (x0, y0), (x1, y1) = ends
+            ax.plot([x0, x1], [y0, y1], color="0.9", lw=1.2, ls=":", path_effects=_OUTLINE)
+            _place_label(ax, "best line, no curve", 0.5 * (x0 + x1), 0.5 * (y0 + y1), "0.9",
+                         w, h)
+            anchors.append(np.array([[x0, y0], [x1, y1]]))
     # the list placed as plot_detections places its own: in the image corner
     # farthest from the curves, beside an image too small to hold it (a
     # sonar crop drawn pixel for pixel was a third covered), or its lines
@@ -94,5 +107,5 @@ def plot_curves(image, curves, path=None, *, title=None, max_width=None,
     if title is None:
         n = len(curves)
         title = "no curve found" if n == 0 else f"{n} curve{'s' if n > 1 else ''}"
-    ax.set_title(title, fontsize=12, loc="left")
+    _set_title(fig, ax, title)
     return _finish(fig, path)

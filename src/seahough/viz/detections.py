@@ -15,7 +15,7 @@ from matplotlib.offsetbox import AnchoredOffsetbox, TextArea, VPacker
 from ..config import Config
 from ..errors import ParameterError
 from ._figure import COLOURS, DPI, _OUTLINE, _TEXT_OUTLINE, _as_display, _det_label, _figure, \
-    _finish, _items, _line_ends, _line_extent, _show, _text_size
+    _finish, _items, _line_ends, _line_extent, _set_title, _show, _text_size
 from ._inset import _pattern_beside, _pattern_inset
 
 _IMAGE_BOX = 900        # longer side of an image drawn by plot_detections, px
@@ -592,6 +592,6 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
     if title is None:
         n = len(detections)
         title = "pattern not found" if n == 0 else f"{n} detection{'s' if n > 1 else ''}"
-    ax.set_title(title, fontsize=12, loc="left")
+    _set_title(fig, ax, title)
     return _finish(fig, path)
 
