@@ -115,6 +115,15 @@ def test_plot_edges(tmp_path, box_search):
     im = read_png(tmp_path / "edges.png")
     assert im.shape[:2] == (560, 1300)
     assert count_colour(im, "#00e5ff") > 100               # segments drawn
+    # the right panel's title ends left of the colour bar (a seabed's 18,721 edge
+    # points: it ran under it, its end lost)
+    sea = seahough.sim.seabed((480, 640), seed=2)
+    res = seahough.Detector(seahough.Pattern.rectangle(40, 30)).search(sea)
+    assert len(res.features.edges) >= 10_000
+    fig = plot.plot_edges(sea, res.features)
+    ax2, cax = fig.axes[1], fig.axes[2]
+    bb = ax2.title.get_window_extent(fig.canvas.get_renderer())
+    assert bb.x1 < cax.get_position().x0 * fig.bbox.width, bb
     with pytest.raises(ValueError, match="features"):       # pictures never run the search
         plot.plot_edges(img, None, tmp_path / "edges2.png")
 

@@ -105,7 +105,8 @@ def plot_edges(image, features, path=None, *, title=None) -> Figure:
         ax.set_ylim(H - 0.5, -0.5)
         ax.set_xlabel("x (image px)")
         ax.set_ylabel("y (image px)")
-    ax2.set_title(f"edges at {scale}: {kp.size:,} key points, {n_seg:,} segments "
+    # (on two lines: on one it ran under the colour bar, its end lost: a user trial)
+    ax2.set_title(f"edges at {scale}: {kp.size:,} key points, {n_seg:,} segments\n"
                   f"({len(features.edges):,} edge points)", fontsize=11)
     if n_seg or kp.size:
         leg = ax2.legend(loc="upper right", fontsize=9, framealpha=0.8, markerscale=3)
