@@ -276,3 +276,26 @@ def test_a_pipe_in_speckled_sonar_is_found_once_the_speckle_is_smoothed():
     ends = sorted([tuple(c.points[0]), tuple(c.points[-1])])
     assert ends[0][0] < 15 and 60 < ends[0][1] < 110, ends
     assert ends[1][0] > 125 and ends[1][1] > 200, ends
+
+
+def test_a_curve_that_leaves_the_image_ends_on_its_border():
+    """Two ropes crossing the frame (a user trial): one's end was reported
+    at y -4.7, outside the image, and another's start at x -5.6e-17,
+    printed "-0.0"."""
+    rng = np.random.default_rng(6)
+    tex = cv2.GaussianBlur(rng.normal(0, 1, (480, 640)).astype(np.float32), (0, 0), 4)
+    img = 90 + 25 * tex / tex.std() + rng.normal(0, 6, (480, 640))
+    x = np.linspace(-20, 660, 400)
+    p1 = np.stack([x, 240 + 60 * np.sin(2 * np.pi * x / 500)], 1)
+    p2 = np.stack([np.linspace(150, 500, 400) + 30 * np.sin(np.linspace(0, 3, 400)),
+                   np.linspace(-20, 500, 400)], 1)
+    for p in (p1, p2):
+        m = np.zeros((480, 640), np.uint8)
+        cv2.polylines(m, [np.round(p * 16).astype(np.int32)], False, 255, 8, cv2.LINE_AA, shift=4)
+        a = m.astype(np.float32) / 255
+        img = img * (1 - a) + 200 * a
+    curves = seahough.find_curves(np.clip(img, 0, 255).astype(np.uint8), 8)
+    assert len(curves) == 2
+    for c in curves:
+        assert "leaves_image" in c.flags
+        assert c.points.min() >= 0.0 and (c.points.max(axis=0) <= (639.0, 479.0)).all(), c.points

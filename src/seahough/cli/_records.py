@@ -23,11 +23,19 @@ def _nfa_text(nfa) -> str:
     return f"{nfa:.1e}" if math.isfinite(nfa) else "-"
 
 
+def _xy(p) -> str:
+    """A point as the table writes it (no "-0.0" for -5.6e-17).
+
+    >>> _xy((-5.6e-17, 240.94))
+    '0.0,240.9'
+    """
+    return ",".join(f"{round(float(v), 1) + 0.0:.1f}" for v in p[:2])
+
+
 def _curve_lines(curves) -> list[str]:
     header = ("#", "length", "width", "from", "to", "points", "score", "conf", "nfa", "flags")
-    rows = [(i + 1, f"{c.length:.1f}", f"{c.width:.2f}",
-             f"{c.points[0][0]:.1f},{c.points[0][1]:.1f}",
-             f"{c.points[-1][0]:.1f},{c.points[-1][1]:.1f}", len(c.points), f"{c.score:.2f}",
+    rows = [(i + 1, f"{c.length:.1f}", f"{c.width:.2f}", _xy(c.points[0]), _xy(c.points[-1]),
+             len(c.points), f"{c.score:.2f}",
              f"{c.confidence:.2f}", _nfa_text(c.nfa), ",".join(c.flags))
             for i, c in enumerate(curves)]
     return _table(rows, header)

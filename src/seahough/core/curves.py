@@ -468,7 +468,7 @@ def _trace(det, res, gray, w, s_range, length, step_cfg, max_turn, step_nfa, oth
                              (FLAG_MAX_PIECES, full_a or full_b),
                              (FLAG_AMBIGUOUS, FLAG_AMBIGUOUS in det.flags)) if on]
     found = [p for p in chain if math.isfinite(p.nfa)]
-    return Curve(points=np.array([[p.x, p.y] for p in chain]),
+    return Curve(points=np.clip([[p.x, p.y] for p in chain], 0.0, (w_img - 1.0, h - 1.0)),
                  width=float(np.median([wide] + fol.widths)),
                  score=float(np.mean([p.score for p in found])), nfa=det.nfa,
                  confidence=det.confidence, flags=tuple(flags), pieces=len(found),
