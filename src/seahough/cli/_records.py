@@ -7,6 +7,7 @@ import csv
 import io
 import json
 import math
+import re
 
 from ..core.detector import FLAG_ALONG_LINE
 from ..geometry import format_angle, format_line
@@ -114,12 +115,30 @@ _OPTION_OF = (("min_score", "--min-score"), ("max_nfa", "--max-nfa"),
               ("min_length", "curve:WIDTH,PIECE_LENGTH,MIN_LENGTH"))
 
 
+def _option_hint(c) -> str:
+    """The option that would let ``c`` through, named after its reason; not
+    for a score far under its bound (under half of it: nothing like the
+    pattern may be there, and a lower --min-score then --max-nfa reported
+    wrong poses, a user trial), which says so instead.
+
+    >>> from types import SimpleNamespace as C
+    >>> _option_hint(C(score=0.45, declined="score 0.45 under min_score 0.5"))
+    ' (option --min-score)'
+    >>> _option_hint(C(score=0.2, declined="score 0.2 (coarse) under 0.425 (0.85 x min_score)"))
+    ' (far under it: the pattern may not be in view)'
+    """
+    option = next((o for words, o in _OPTION_OF if words in c.declined), None)
+    bound = re.search(r"under (\d+(?:\.\d+)?(?:e[-+]?\d+)?)", c.declined)
+    if option == "--min-score" and bound and c.score < 0.5 * float(bound.group(1)):
+        return " (far under it: the pattern may not be in view)"
+    return f" (option {option})" if option else ""
+
+
 def _best_declined_line(c) -> str:
     q = c.pose
     name = f"{c.pattern}: " if c.pattern else ""
     nfa = f", nfa {_nfa_text(c.nfa)}" if math.isfinite(c.nfa) else ""
-    option = next((o for words, o in _OPTION_OF if words in c.declined), None)
-    hint = f" (option {option})" if option else ""
+    hint = _option_hint(c)
     return (f"  best candidate, not reported: {name}x {q.tx:.1f}, y {q.ty:.1f}, scale "
             f"{q.scale:.3f}, angle {format_angle(q.angle, 1)}, score {c.score:.2f}{nfa}: "
             f"{c.declined}{hint}")
