@@ -1006,6 +1006,11 @@ def test_a_list_of_other_things_is_a_parameter_error_naming_it():
         plot_detections(img, [1, 2])
     with pytest.raises(ParameterError, match="curves: expected Curve objects"):
         plot_curves(img, [1, 2])
+    res = seahough.Detector(seahough.Pattern.rectangle(40, 30)).search(img)
+    with pytest.raises(ParameterError, match="a list of Detection objects .*got SearchResult"):
+        plot_detections(img, res)                         # (its .detections)
+    with pytest.raises(ParameterError, match="best: expected Candidate"):
+        plot_curves(img, [], best=5)
 
 
 def test_a_long_title_is_broken_to_fit_the_picture():
@@ -1022,10 +1027,12 @@ def test_a_long_title_is_broken_to_fit_the_picture():
         assert "\n" in t.get_text() and t.get_text().replace("\n", " ") == why
         bb = t.get_window_extent(fig.canvas.get_renderer())
         assert bb.x1 <= fig.bbox.width and bb.y1 <= fig.bbox.height, bb
-    # one far too long: three lines, the last cut
-    fig = plot_detections(img, [], title=" ".join([why] * 5))
-    text = fig.axes[0]._left_title.get_text()
-    assert text.count("\n") == 2 and text.endswith("...")
+    # one far too long: three lines, the last cut; one long word (a path) cut too
+    for title, lines in ((" ".join([why] * 5), 3), ("/a/very/long/path" * 20, 1)):
+        fig = plot_detections(img, [], title=title)
+        t = fig.axes[0]._left_title
+        assert t.get_text().count("\n") == lines - 1 and t.get_text().endswith("...")
+        assert t.get_window_extent(fig.canvas.get_renderer()).x1 <= fig.bbox.width
 
 
 def test_a_curve_search_that_found_nothing_draws_its_best_line():

@@ -631,3 +631,19 @@ def test_images_say_what_was_left_out_and_why_nothing_was_found(cluster, tmp_pat
     assert best is not None
     assert rows[1]["best_score"] == pytest.approx(best.score)
     assert rows[1]["declined"] == best.declined and rows[1]["declined"]
+
+
+def test_a_run_stopped_by_an_error_says_which(tmp_path):
+    """survey.json after an error: state stopped, the error itself (not its
+    class alone), and the images done as the shards hold them."""
+    shards = _shards()
+    with pytest.raises(RuntimeError):
+        with shards.SurveyFolder(tmp_path / "o") as f:
+            f.start({"a": 1}, ["x.png", "y.png", "z.png"])
+            f.write_part([shards.image_row(0, "x.png", "not found"),
+                          shards.image_row(1, "y.png", "not found")], [])
+            raise RuntimeError("the disk went away")
+    rec = json.loads((tmp_path / "o" / "survey.json").read_text())
+    assert rec["state"] == "stopped"
+    assert rec["stopped"]["why"] == "stopped by an error: RuntimeError: the disk went away"
+    assert rec["stopped"]["images_done"] == 2

@@ -64,9 +64,10 @@ def pair(name: str, value) -> tuple[float, float]:
 
 
 def _turn_hint(name: str, a: float, b: float, form: str = "({}, {})") -> str:
-    """For a rotation range given across 0 (350, 10): how to say it (each
-    pair in ``form``)."""
-    if "angle" not in name or not (0 <= b < a < 360):
+    """For a rotation range given across 0 (350, 10: more than half a turn
+    back): how to say it (each pair in ``form``); a plain swap (10, 5) gets
+    none."""
+    if "angle" not in name or not (0 <= b < a < 360) or a - b <= 180:
         return ""
     return (f" (the turns from {a:g} through 0 to {b:g} degrees are "
             f"{form.format(f'{a:g}', f'{b + 360:g}')} or {form.format(f'{a - 360:g}', f'{b:g}')})")

@@ -209,7 +209,21 @@ def test_points_that_are_not_pairs_or_turn_back_are_refused():
         seahough.Pattern.polyline([(0, 0), (100, 0), (0, 0)], 6)
     with pytest.raises(ParameterError, match="turns back"):
         seahough.Pattern.polyline([(0, 0), (100, 0), (0, 5)], 6)
-    seahough.Pattern.polyline([(0, 0), (50, 8), (100, 0)], 6)       # (a sharp chevron is one)
+    # the limit, 170 degrees: a chevron's tip of 11 degrees is one, of 8 not
+    tip = lambda deg: [(0, 0), (100, 0), (100 - 100 * math.cos(math.radians(deg)),
+                                          100 * math.sin(math.radians(deg)))]
+    seahough.Pattern.polyline(tip(11.3), 2)
+    with pytest.raises(ParameterError, match="by 172 degrees"):
+        seahough.Pattern.polyline(tip(8.5), 2)
+    # a hairpin of two right angles: its strips lie on each other
+    with pytest.raises(ParameterError, match="from point 0 and from point 2 lie on each other"):
+        seahough.Pattern.polyline([(0, 0), (100, 0), (100, 2), (0, 2)], 6)
+    seahough.Pattern.polyline([(0, 0), (100, 0), (100, 30), (0, 30)], 6)   # (a U 30 px wide)
+    # a point under half a pixel off its neighbour is jitter, not a turn back
+    seahough.Pattern.polyline([(0, 0), (50, 0), (49.999, 0.0001), (100, 0)], 6)
+    # a polygon's (x, y, z) rows too
+    with pytest.raises(ParameterError, match="expected \\(x, y\\) pairs"):
+        seahough.Pattern.polygon([(0, 0, 0), (10, 0, 0), (10, 10, 0)])
 
 
 def _drawn(pattern, scale, degrees, centre, seed):
@@ -228,10 +242,10 @@ def _drawn(pattern, scale, degrees, centre, seed):
 
 @pytest.mark.parametrize("points, width, scale, degrees, seed, ranges", [
     ([(0, 100), (0, 0), (210, 0), (210, 100)], 6, 2.0, 6.0, 21, ((0.9, 3.0), (-15, 15))),
-    ([(0, 100), (0, 0), (210, 0), (210, 100)], 6, 2.0, 6.0, 21, ((1.5, 2.5), (0, 360))),
+    ([(0, 100), (0, 0), (210, 0), (210, 100)], 6, 2.0, 6.0, 21, ((1.0, 3.0), (0, 360))),
     ([(0, 0), (0, 60), (90, 60)], 8, 1.0, 17.2, 1, ((0.5, 2.0), (0, 360))),
     ([(0, 0), (0, 60), (90, 60)], 4, 1.6, 17.2, 1, ((0.5, 2.0), (0, 360))),
-], ids=["gate 0.9-3", "gate 1.5-2.5", "L", "thin L 1.6"])
+], ids=["gate 0.9-3", "gate 1-3 any turn", "L", "thin L 1.6"])
 def test_an_open_shape_is_found_at_its_own_size(points, width, scale, degrees, seed, ranges):
     """An open shape's size is held by few of its points (a gate's far post,
     an L's two ends): a drawn gate came back 7-14 % too large, one post on

@@ -301,20 +301,7 @@ class Pattern:
     @classmethod
     def polygon(cls, points, *, polarity="bright", margin=6.0) -> "Pattern":
         """A filled polygon given by its vertices [(x1, y1), (x2, y2), ...]."""
-        try:
-            pts = np.asarray(points, float).reshape(-1, 2)
-        except (TypeError, ValueError):
-            raise ParameterError(f"polygon points {points!r}: expected (x, y) pairs") from None
-        if pts.shape[0] < 3 or not np.isfinite(pts).all():
-            raise ParameterError("polygon needs at least 3 finite (x, y) vertices")
-        pts = pts - pts.min(axis=0)
-        area = 0.5 * abs(np.sum(pts[:, 0] * np.roll(pts[:, 1], -1) - np.roll(pts[:, 0], -1) * pts[:, 1]))
-        if area < 4.0:
-            raise PatternError("polygon encloses (almost) no area")
-        across = min(cv2.minAreaRect(pts.astype(np.float32))[1])  # its narrower side
-        if across < MIN_SHAPE_SIZE:
-            raise ParameterError(f"polygon points: {across:.3g} px across at its narrowest: must "
-                                 f"be at least {MIN_SHAPE_SIZE:g} px")
+        pts = _shapes.vertices(points, MIN_SHAPE_SIZE)
         w, h = pts.max(axis=0)
         return cls._shape([pts], w, h, margin, polarity, "polygon")
 

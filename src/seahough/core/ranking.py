@@ -51,10 +51,8 @@ CAPTURE = 0.1
 RESCALE = 1.12
 #: A polyline's candidate is also fitted at sizes this step apart, up to
 #: this many steps larger and smaller (:func:`_rescaled`; 12 drawn gates, 3
-#: ranges: 24 -> 35 of 36 within 3 px; 8 steps: 36, 20 % more time, 6: 5 %),
+#: ranges: 24 -> 35 of 36 within 3 px; at most 5 % more time on RoboSub photos).
 POLYLINE_RESIZE = (0.02, 6)
-#: ... and a full-resolution refinement losing more score is not taken.
-LOST_SCORE = 0.02
 
 
 @dataclass(eq=False)
@@ -257,11 +255,6 @@ def _full_res(ctx: SearchContext, fit: Fit, gray, where=None) -> Fit:
                   fix_angle=ctx.angle_known, score_radius=cfg.match_radius)
         f = refine(local, vx, vy, vang, edges, index,
                    radii=(_full_radius(factor), 1.5) if cfg.refine else (), iterations=3, **kw)
-        if cfg.refine and p.kind == "polyline":
-            # (its size held by few points, the refinement can slide it larger:
-            # an L from a score of 0.99 to 0.90; one that loses is not taken)
-            f0 = refine(local, vx, vy, vang, edges, index, radii=(), **kw)
-            f = f0 if f0.score > f.score + LOST_SCORE else f
         q = f.pose
         # the share inside the image is measured on the whole image, not the crop
         mx, my = Pose(q.a, q.b, q.tx + x0, q.ty + y0).map(vx, vy)
@@ -290,17 +283,17 @@ def _subset(ctx: SearchContext):
     return tuple(np.ascontiguousarray(v[sub]) for v in (pf.vx, pf.vy, pf.vangle))
 
 
-def _shifted(ctx: SearchContext, pose: Pose, radius: int, points) -> Pose:
+def _shifted(ctx: SearchContext, pose: Pose, radius: int, points, rescale=True) -> Pose:
     """``pose`` moved by the shift most of the pattern's ``points`` (vx, vy,
     vangle) agree on, within ``radius`` working px (:func:`~.kernels.shift_votes`, smoothed
-    over 3 x 3 px), at its scale or :data:`RESCALE` times larger or smaller
+    over 3 x 3 px), at its scale or (``rescale``) :data:`RESCALE` times larger or smaller
     (a board of nested rings found a ring off); ``pose`` itself when no
     other does better."""
     e = ctx.features.edges
     vx, vy, vang = points
     tol = math.radians(ctx.config.angle_tolerance)
     best, at = -1.0, pose
-    scales = (1.0,) if ctx.scale_known else (1.0, RESCALE, 1.0 / RESCALE)
+    scales = (1.0,) if ctx.scale_known or not rescale else (1.0, RESCALE, 1.0 / RESCALE)
     for m in scales:
         q = Pose(pose.a * m, pose.b * m, pose.tx, pose.ty)
         if m != 1.0 and (not ctx.compare.pose_ok(q)
@@ -377,6 +370,7 @@ def _rescaled(ctx: SearchContext, c: Candidate, radius: int, sub, kw) -> list:
     32 px off at a score of 0.77 (1.00 at its size); an L 8 px off."""
     pf, feats, p, q0 = ctx.pf, ctx.features, ctx.pattern, c.fit.pose
     step, n = POLYLINE_RESIZE
+    most = max(8, 4 * int(ctx.config.search.max_radius))   # (a bound on the shift's cost)
     fixed = dict(kw, fix_scale=True)
     out = []
     for k in range(1, n + 1):
@@ -384,8 +378,9 @@ def _rescaled(ctx: SearchContext, c: Candidate, radius: int, sub, kw) -> list:
             q = Pose(q0.a * m, q0.b * m, q0.tx, q0.ty)
             if ctx.compare.outside_ranges(q.scale, q.angle):
                 continue
-            reach = abs(1.0 - m) * 0.5 * p.extent * q0.scale
-            moved = _shifted(ctx, q, max(radius, int(math.ceil(reach)) + 2), sub)
+            reach = abs(1.0 - m) * 0.5 * p.extent * q0.scale * ctx.factor   # (working px)
+            r = min(max(radius, int(math.ceil(reach)) + 2), most)
+            moved = _shifted(ctx, q, r, sub, rescale=False)
             moved = refine(moved, *sub, feats.edges, feats.index, radii=(2.0, 1.5, 1.25),
                            iterations=3, **fixed).pose
             work = refine(moved, pf.vx, pf.vy, pf.vangle, feats.edges, feats.index, radii=(),
@@ -597,4 +592,3 @@ def to_detection(ctx: SearchContext, c: Candidate, conf: float, shape) -> Detect
         flags.append(FLAG_RANGE_EDGE)
     return Detection(float(x), float(y), float(s), float(a), float(c.full.score), conf,
                      m, outline, c.votes, kind, la, lo, tuple(flags), c.evidence.nfa)
-

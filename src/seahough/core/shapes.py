@@ -19,7 +19,7 @@ import math
 import cv2
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import ParameterError, PatternError
 
 #: A corner's mitre longer than this many strip widths is bevelled (SVG's default).
 MITRE_LIMIT = 4.0
@@ -45,9 +45,12 @@ def _points(points) -> np.ndarray:
         raise ParameterError(f"points={points!r}: expected (x, y) pairs") from None
     if not np.isfinite(pts).all():
         raise ParameterError("points: the polyline's coordinates must be finite")
-    if pts.shape[0] >= 2:
-        step = np.hypot(*np.diff(pts, axis=0).T)
-        pts = pts[np.r_[True, step > 1e-9]]
+    if pts.shape[0] >= 2:   # (points under half a pixel apart are one: jitter turns back)
+        keep = [0]
+        for i in range(1, pts.shape[0]):
+            if np.hypot(*(pts[i] - pts[keep[-1]])) >= 0.5:
+                keep.append(i)
+        pts = pts[keep]
     if pts.shape[0] < 2:
         raise ParameterError("points: a polyline needs at least 2 distinct (x, y) points")
     d = np.diff(pts, axis=0)
@@ -59,6 +62,51 @@ def _points(points) -> np.ndarray:
                              f"({pts[i, 0]:g}, {pts[i, 1]:g}), by {turn[i - 1]:.0f} degrees (at "
                              f"most {MAX_TURN:g}: its two strips would lie on each other)")
     return pts
+
+
+def vertices(points, min_size: float) -> np.ndarray:
+    """A polygon's vertices as an (n, 2) array moved to (0, 0), checked: at
+    least 3 finite (x, y) pairs ((x, y, z) rows were re-paired into another
+    polygon), some area, ``min_size`` px across at its narrowest."""
+    try:
+        pts = np.asarray(points, float)
+    except (TypeError, ValueError):
+        pts = np.zeros((0, 3))
+    if pts.ndim != 2 or pts.shape[1] != 2:
+        raise ParameterError(f"polygon points {points!r}: expected (x, y) pairs")
+    if pts.shape[0] < 3 or not np.isfinite(pts).all():
+        raise ParameterError("polygon needs at least 3 finite (x, y) vertices")
+    pts = pts - pts.min(axis=0)
+    area = 0.5 * abs(np.sum(pts[:, 0] * np.roll(pts[:, 1], -1) - np.roll(pts[:, 0], -1) * pts[:, 1]))
+    if area < 4.0:
+        raise PatternError("polygon encloses (almost) no area")
+    across = min(cv2.minAreaRect(pts.astype(np.float32))[1])  # its narrower side
+    if across < min_size:
+        raise ParameterError(f"polygon points: {across:.3g} px across at its narrowest: must "
+                             f"be at least {min_size:g} px")
+    return pts
+
+
+def _lying_on_each_other(pts: np.ndarray, width: float):
+    """The first two strips that are not neighbours and lie on each other
+    (nearly parallel, under ``width`` apart, side by side for more than a
+    width: a hairpin of two right angles), as ``(i, j)`` segment indices, or
+    None. Strips that merely cross are allowed."""
+    for i in range(len(pts) - 1):
+        a0, a1 = pts[i], pts[i + 1]
+        u = (a1 - a0) / np.hypot(*(a1 - a0))
+        for j in range(i + 2, len(pts) - 1):
+            b0, b1 = pts[j], pts[j + 1]
+            v = (b1 - b0) / np.hypot(*(b1 - b0))
+            if abs(u @ v) < math.cos(math.radians(30.0)):
+                continue
+            n = np.array([-u[1], u[0]])
+            if max(abs((b0 - a0) @ n), abs((b1 - a0) @ n)) >= width:
+                continue
+            t = sorted(((b0 - a0) @ u, (b1 - a0) @ u))
+            if min(t[1], np.hypot(*(a1 - a0))) - max(t[0], 0.0) > width:
+                return i, j
+    return None
 
 
 def strip_polygons(points, width: float, mitre_limit: float = MITRE_LIMIT) -> list[np.ndarray]:
@@ -205,6 +253,11 @@ def polyline(cls, points, width, *, polarity="bright", margin=6.0):
     pts = _points(points)
     _check_positive(width=width)
     W = float(width)
+    both = _lying_on_each_other(pts, W)
+    if both is not None:
+        i, j = both
+        raise ParameterError(f"points: the strips from point {i} and from point {j} lie on each "
+                             f"other (nearly parallel, under width={W:g} apart)")
     if float(np.hypot(*np.diff(pts, axis=0).T).sum()) < 1.0:
         raise ParameterError("points: the polyline must be at least 1 px long")
     _check_polarity(polarity)

@@ -58,7 +58,11 @@ def _items(name: str, items, kind: str, attrs: tuple, source: str) -> list:
     """``items`` as a list, each with the attributes ``attrs`` of a ``kind``
     (a ParameterError naming ``name`` and what gives them, not an
     AttributeError deep in the drawing)."""
-    out = list(items or [])
+    try:
+        out = list(items or [])
+    except TypeError:   # (a SearchResult: its .detections)
+        raise ParameterError(f"{name}: expected a list of {kind} objects ({source}), got "
+                             f"{type(items).__name__}") from None
     bad = next((v for v in out if not all(hasattr(v, a) for a in attrs)), None)
     if bad is not None:
         raise ParameterError(f"{name}: expected {kind} objects ({source}), got "
@@ -91,11 +95,15 @@ def _set_title(fig: Figure, ax, title: str) -> None:
                 lines[-1] = trial
         if len(lines) <= most:
             break
-    if len(lines) > most:
-        lines = lines[:most]
-        while len(lines[-1]) > 1 and _text_size(fig, lines[-1] + " ...", fontsize=size)[0] > room:
-            lines[-1] = lines[-1][:-1]
-        lines[-1] += " ..."
+    cut = len(lines) > most
+    lines = lines[:most]
+    for k, line in enumerate(lines):   # (a line still too wide: one long word, a path)
+        end = " ..." if cut and k == len(lines) - 1 else ""
+        if end or _text_size(fig, line, fontsize=size)[0] > room:
+            while len(line) > 1 and _text_size(fig, line + (end or " ..."),
+                                               fontsize=size)[0] > room:
+                line = line[:-1]
+            lines[k] = line + (end or " ...")
     ax.set_title("\n".join(lines), fontsize=size, loc="left")
 
 

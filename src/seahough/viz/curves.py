@@ -74,6 +74,8 @@ def plot_curves(image, curves, path=None, *, title=None, max_width=None,
     (1000, 775)
     """
     curves = _items("curves", curves, "Curve", ("points", "width"), "from find_curves")
+    best = (_items("best", [best], "Candidate", ("pose",), "find_curves(declined=[])'s first")[0]
+            if best is not None else None)
     fig, ax, _, _, (w, h), box = _image_figure(image, max_width, bit_depth)
     ax.set_xlabel("x (px)")
     ax.set_ylabel("y (px)")
