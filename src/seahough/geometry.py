@@ -447,6 +447,37 @@ class Similarity:
         return Similarity.from_columns(shift_origin(self.matrix, ox, oy))
 
 
+def clip_polyline_ends(points, width: int, height: int) -> np.ndarray:
+    """A polyline ``points`` (n x 2) with an end point outside the image
+    (``width`` x ``height`` px, pixel centres 0 to w - 1) moved back along
+    its last segment to where that crosses the border (a rope leaving the
+    frame: clipping each coordinate alone moved the end 12 px along the
+    border); any other point outside is clipped.
+
+    >>> clip_polyline_ends([[600.0, 50.0], [620.0, 1.4], [650.0, -4.7]], 640, 480).round(1)
+    array([[600. ,  50. ],
+           [620. ,   1.4],
+           [626.9,   0. ]])
+    """
+    p = np.array(points, float).reshape(-1, 2)
+    hi = np.array([width - 1.0, height - 1.0])
+    for end, inner in ((0, 1), (len(p) - 1, len(p) - 2)):
+        if len(p) < 2 or ((p[end] >= 0).all() and (p[end] <= hi).all()):
+            continue
+        a, b = p[inner], p[end]
+        if not ((a >= 0).all() and (a <= hi).all()):
+            continue
+        d = b - a
+        t = 1.0
+        for k in range(2):   # (the largest step along a -> b that stays inside)
+            if d[k] > 0:
+                t = min(t, (hi[k] - a[k]) / d[k])
+            elif d[k] < 0:
+                t = min(t, -a[k] / d[k])
+        p[end] = a + max(t, 0.0) * d
+    return np.clip(p, 0.0, hi)
+
+
 def _matrix23(matrix) -> np.ndarray:
     """A 2x3 matrix from a 2x3 one, its 6 numbers in a row, or a 3x3 one
     whose last row is 0, 0, 1; a ParameterError naming the shape otherwise."""

@@ -68,6 +68,7 @@ from .._validate import _a_list, check_max_nfa, number, pair
 from .._values import ValueEquality
 from ..config import Config
 from ..errors import ParameterError
+from ..geometry import clip_polyline_ends
 from ..io.images import to_gray
 from .detector import FLAG_AMBIGUOUS, Detection, Detector
 from .pattern import Pattern
@@ -422,8 +423,7 @@ def _trace(det, res, gray, w, s_range, length, step_cfg, max_turn, step_nfa, oth
     """The curve grown from a seed detection, or why none was (a str): its
     point does not show the rope's profile (:data:`_SEED_BALANCE`), or it
     lies on a curve found before."""
-    sx, sy = _seed_position(res, det)
-    d = _direction(det.line_angle)
+    (sx, sy), d = _seed_position(res, det), _direction(det.line_angle)
     lo, hi = s_range[0] * w, s_range[1] * w
     m = _profile(gray, sx, sy, d, 0.5 * length, lo, hi, polarity)
     if _SEED_BALANCE is not None and (m is None or m[3] < _SEED_BALANCE):
@@ -468,7 +468,7 @@ def _trace(det, res, gray, w, s_range, length, step_cfg, max_turn, step_nfa, oth
                              (FLAG_MAX_PIECES, full_a or full_b),
                              (FLAG_AMBIGUOUS, FLAG_AMBIGUOUS in det.flags)) if on]
     found = [p for p in chain if math.isfinite(p.nfa)]
-    return Curve(points=np.clip([[p.x, p.y] for p in chain], 0.0, (w_img - 1.0, h - 1.0)),
+    return Curve(points=clip_polyline_ends([[p.x, p.y] for p in chain], w_img, h),
                  width=float(np.median([wide] + fol.widths)),
                  score=float(np.mean([p.score for p in found])), nfa=det.nfa,
                  confidence=det.confidence, flags=tuple(flags), pieces=len(found),
