@@ -948,6 +948,23 @@ def test_odometry_resume_after_a_killed_run(sequence_dir, tmp_path):
         csv_without_timing(tmp_path / "full" / "odometry.csv")
 
 
+def test_odometry_says_when_it_replaces_an_earlier_run(sequence_dir, tmp_path):
+    """Without --resume a run replaces the one in --out: said in one line
+    (a forgotten flag cost an interrupted survey's rows, unsaid)."""
+    killed = tmp_path / "o"
+    killed.mkdir()
+    full = tmp_path / "full"
+    assert run("odometry", sequence_dir, "--out", full, "--quiet", "--no-mosaic").returncode == 0
+    lines = (full / "odometry.csv").read_text().splitlines(keepends=True)
+    (killed / "odometry.csv").write_text("".join(lines[:4]))          # 3 rows kept
+    proc = run("odometry", sequence_dir, "--out", killed, "--no-mosaic")
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr.splitlines() == [f"seahough: note: replacing the run of 3 frames in "
+                                        f"{killed} (--resume would go on with it)"], proc.stderr
+    proc = run("odometry", sequence_dir, "--out", tmp_path / "new", "--no-mosaic")
+    assert "replacing" not in proc.stderr                          # (nothing there before)
+
+
 def test_demo_end_to_end(tmp_path):
     from seahough.viz import detections_size
 

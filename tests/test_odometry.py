@@ -264,6 +264,27 @@ def test_metres_per_pixel_needs_both_altitude_and_focal(tmp_path):
         assert "metres_per_pixel" in str(e.value) and "altitude" in str(e.value)
         assert "not both" in str(e.value)
     assert not (tmp_path / "both" / "odometry.csv").exists()    # refused before any work
+    # units that cannot be (an altitude in mm: 53.6 km for 4 s of survey; a ratio of 0)
+    for kw in ({"altitude": 2500.0, "focal_px": 8.0}, {"metres_per_pixel": 1e9},
+               {"altitude": 1e-300, "focal_px": 1e300}):
+        with pytest.raises(seahough.ParameterError, match="m a pixel: must be over 0 and at "
+                                                          "most 10 \\(an altitude in millimetres"):
+            run_odometry(frames, tmp_path / "units", progress=False, **kw)
+
+
+def test_the_frames_folder_is_not_the_output_folder(tmp_path):
+    """--out set to the frames' folder: the next run read mosaic.png and
+    trajectory.png as frames (unreadable), and --resume was refused for
+    good; now refused at once. A subfolder is fine."""
+    frames, _ = _sequence("line", n=3)
+    write_frames(frames, tmp_path / "dive")
+    for given in (tmp_path / "dive", str(tmp_path / "dive"), [tmp_path / "dive"]):
+        with pytest.raises(seahough.ParameterError, match="is the frames' folder"):
+            run_odometry(given, tmp_path / "dive", progress=False, mosaic=False)
+    assert sorted(p.name for p in (tmp_path / "dive").iterdir()) == [
+        "f_000.png", "f_001.png", "f_002.png"]                  # (nothing written there)
+    r = run_odometry(tmp_path / "dive", tmp_path / "dive" / "run", progress=False, mosaic=False)
+    assert len(r.rows) == 3
 
 
 def test_metres_per_pixel_scales_the_track(tmp_path):

@@ -176,6 +176,10 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
     from ..motion.odometry import run_odometry
 
     unit = "m" if (metres_per_pixel is not None or altitude is not None) else "px"
+    earlier = None if resume else _rows_in(out)
+    if earlier and not quiet:   # (one forgotten --resume cost a long survey's run, unsaid)
+        click.echo(f"seahough: note: replacing the run of {earlier} frame{'s' * (earlier != 1)} "
+                   f"in {printable(str(out))} (--resume would go on with it)", err=True)
     t0 = time.perf_counter()
     try:
         result = run_odometry(list(frames), out, metres_per_pixel=metres_per_pixel,
@@ -193,12 +197,19 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
     return report(result, time.perf_counter() - t0, unit, as_json)
 
 
-def _kept(out) -> str:
-    """What an interrupted run in ``out`` kept, in words ("" when unknown)."""
+def _rows_in(out) -> int | None:
+    """How many rows the ``odometry.csv`` in ``out`` holds (None: none there)."""
     try:
         with open(Path(out) / "odometry.csv", newline="") as f:
-            n = max(sum(1 for _ in f) - 1, 0)
+            return max(sum(1 for _ in f) - 1, 0)
     except OSError:
+        return None
+
+
+def _kept(out) -> str:
+    """What an interrupted run in ``out`` kept, in words ("" when unknown)."""
+    n = _rows_in(out)
+    if n is None:
         return ""
     return (f"{n} frame{'s' * (n != 1)} kept in {printable(str(out))}/odometry.csv; the same "
             "command with --resume goes on from there")

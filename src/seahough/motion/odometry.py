@@ -241,6 +241,7 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     odo = Odometer(scale_range, angle_range, metres_per_pixel=metres_per_pixel,
                    altitude=altitude, focal_px=focal_px, config=config, tuning=tuning, fps=fps)
     workers = check_workers(workers)
+    _not_the_frames_folder(frames, out_dir)
     items = list_frames(frames)
     cfg = odo.config
     reader = FrameReader(items, cfg.max_pixels, cfg.max_memory_mb, fps=odo.fps)
@@ -255,6 +256,19 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
             raise
         finally:
             reader.close()
+
+
+def _not_the_frames_folder(frames, out_dir) -> None:
+    """A ParameterError when ``out_dir`` is the frames' folder: the run's
+    pictures (mosaic.png, trajectory.png) would be frames of the next run
+    over it (a user trial: its second run flagged them unreadable, and
+    --resume was refused for good as "frame 10 changed")."""
+    folder = frames[0] if isinstance(frames, (list, tuple)) and len(frames) == 1 else frames
+    if isinstance(folder, (str, os.PathLike)) and os.path.isdir(folder) and os.path.exists(
+            out_dir) and os.path.samefile(folder, out_dir):
+        raise ParameterError(f"out_dir {os.fspath(out_dir)!r} is the frames' folder: the run's "
+                             "pictures would be read as frames by the next run; give another "
+                             "folder (e.g. a subfolder)")
 
 
 def _source(frames) -> str | None:

@@ -310,9 +310,20 @@ def plot_track(csv_path, path: Path, metric: bool):
     return path
 
 
+#: The most metres a pixel may cover: a photo 1,000 px wide over 10 km of seabed.
+MAX_METRES_PER_PIXEL = 10.0
+
+
 def resolve_metres_per_pixel(metres_per_pixel, altitude, focal_px):
     def pos(name, v):
         return number(name, v, lo=0.0, lo_open=True)
+
+    def sane(mpp, how):   # (a user's altitude in mm gave 53.6 km for 4 s of survey)
+        if not (math.isfinite(mpp) and 0.0 < mpp <= MAX_METRES_PER_PIXEL):
+            raise ParameterError(f"{how} = {mpp:.3g} m a pixel: must be over 0 and at most "
+                                 f"{MAX_METRES_PER_PIXEL:g} (an altitude in millimetres, or a "
+                                 "focal length in mm rather than pixels?)")
+        return mpp
 
     if metres_per_pixel is not None:
         if altitude is not None or focal_px is not None:
@@ -320,13 +331,13 @@ def resolve_metres_per_pixel(metres_per_pixel, altitude, focal_px):
                               if v is not None)
             raise ParameterError(f"give metres_per_pixel, or altitude with focal_px, not both "
                                  f"(got metres_per_pixel={metres_per_pixel!r} and {given})")
-        return pos("metres_per_pixel", metres_per_pixel)
+        return sane(pos("metres_per_pixel", metres_per_pixel), "metres_per_pixel")
     if altitude is None and focal_px is None:
         return None
     if altitude is None or focal_px is None:
         raise ParameterError("altitude and focal_px go together (metres per pixel = "
                              "altitude / focal_px for a down-looking camera)")
-    return pos("altitude", altitude) / pos("focal_px", focal_px)
+    return sane(pos("altitude", altitude) / pos("focal_px", focal_px), "altitude / focal_px")
 
 
 def summarise(t: Totals, items, mpp, scale_range, angle_range, cfg, tuning, n_resumed, wall_s,
