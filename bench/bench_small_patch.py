@@ -139,11 +139,10 @@ def cases(name: str, part: str, n: int, sides, frames=photos, margin: float = 1.
                            truth=c), frame[y:y + side, x:x + side], scene
 
 
-def measure(case, patch, scene) -> dict:
+def _timed(case, fns: dict) -> dict:
+    """Each method of ``fns`` (name -> call giving the patch centre or None)
+    run on the case: answered, error to the truth, CPU ms."""
     out = {}
-    fns = {"seahough": lambda: _seahough(patch, scene, D.TEXTURE_DENSITY),
-           "seahough, no added key points": lambda: _seahough(patch, scene, 0.0),
-           "SIFT+RANSAC": lambda: _sift(patch, scene)}
     for name, fn in fns.items():
         t = time.process_time()
         r = fn()
@@ -152,21 +151,20 @@ def measure(case, patch, scene) -> dict:
                                                      r[1] - case["truth"][1])
         out[name] = dict(answered=r is not None, err=err, ms=ms)
     return dict(case, res=out)
+
+
+def measure(case, patch, scene) -> dict:
+    return _timed(case, {
+        "seahough": lambda: _seahough(patch, scene, D.TEXTURE_DENSITY),
+        "seahough, no added key points": lambda: _seahough(patch, scene, 0.0),
+        "SIFT+RANSAC": lambda: _sift(patch, scene)})
 
 
 def measure_medium(case, patch, scene) -> dict:
-    out = {}
-    fns = {"seahough": lambda: _seahough(patch, scene, D.TEXTURE_DENSITY, (0.5, 2.0)),
-           MEDIUM_METHODS[1]: lambda: _seahough(patch, scene, D.TEXTURE_DENSITY, (0.5, 2.0), 16),
-           "SIFT+RANSAC": lambda: _sift(patch, scene)}
-    for name, fn in fns.items():
-        t = time.process_time()
-        r = fn()
-        ms = 1000 * (time.process_time() - t)
-        err = math.inf if r is None else math.hypot(r[0] - case["truth"][0],
-                                                     r[1] - case["truth"][1])
-        out[name] = dict(answered=r is not None, err=err, ms=ms)
-    return dict(case, res=out)
+    return _timed(case, {
+        "seahough": lambda: _seahough(patch, scene, D.TEXTURE_DENSITY, (0.5, 2.0)),
+        MEDIUM_METHODS[1]: lambda: _seahough(patch, scene, D.TEXTURE_DENSITY, (0.5, 2.0), 16),
+        "SIFT+RANSAC": lambda: _sift(patch, scene)})
 
 
 def _cells(recs, method):
