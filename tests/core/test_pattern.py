@@ -348,3 +348,29 @@ def test_a_pattern_file_without_edges_is_named_in_the_error(tmp_path):
     cv2.imwrite(str(path), np.full((40, 40), 128, np.uint8))
     with pytest.raises(PatternError, match=f"^{re.escape(str(path))}: the pattern has too few"):
         Pattern.from_image(str(path))
+
+
+def test_a_cut_out_is_found_whatever_lies_under_its_transparent_pixels(tmp_path):
+    """A cut-out's border is against the pixels under its transparent ones
+    (black, often), not the ground it will lie on: a dark object cut out on
+    black was not found; its polarity is "either" unless one is given. An
+    alpha of 0 everywhere is refused (it was taken for no alpha)."""
+    from seahough import Detector
+
+    rng = np.random.default_rng(4)
+    scene = cv2.GaussianBlur(rng.uniform(150, 230, (240, 320)), (0, 0), 2).astype(np.uint8)
+    inside = np.zeros((240, 320), np.uint8)
+    cv2.ellipse(inside, (160, 120), (60, 36), 0, 0, 360, 255, -1)
+    dark = cv2.GaussianBlur(rng.uniform(20, 90, (240, 320)), (0, 0), 1.5).astype(np.uint8)
+    scene[inside > 0] = dark[inside > 0]
+    crop, alpha = scene[76:165, 92:229].copy(), inside[76:165, 92:229].copy()
+    crop[alpha == 0] = 0                                        # (black under the transparent)
+    cut = np.dstack([crop, crop, crop, alpha])
+    p = Pattern.from_image(cut)
+    assert p.polarity == "either"
+    found = Detector(p, scale_range=(0.9, 1.1)).detect(scene)
+    assert found and abs(found[0].x - 160) < 1.5 and abs(found[0].y - 120) < 1.5
+    assert Pattern.from_image(cut, polarity="same").polarity == "bright"   # (a choice is kept)
+    assert Pattern.from_image(crop).polarity == "bright"                   # (no alpha: same)
+    with pytest.raises(PatternError, match="alpha channel is 0 everywhere"):
+        Pattern.from_image(np.dstack([crop, crop, crop, np.zeros_like(alpha)]))

@@ -564,7 +564,7 @@ def parse_pattern(spec: str, polarity: str | None = None, mask: str | None = Non
         except SeahoughError as e:
             raise _Fail(f"pattern {spec}: {_problem(e, spec)}") from None
     try:
-        return Pattern.from_image(spec, mask=mask, polarity=_IMAGE_POLARITY[polarity or "same"],
+        return Pattern.from_image(spec, mask=mask, polarity=_IMAGE_POLARITY.get(polarity),
                                   config=config)
     except SeahoughError as e:
         raise _Fail(f"pattern {spec}: {_problem(e, spec)}") from None

@@ -42,7 +42,7 @@ MIN_SHAPE_SIZE = 1.0
 #: the image's longer side.
 MAX_ORIGIN_OUTSIDE = 10
 _IMAGE_POLARITIES = {"same": "bright", "inverted": "dark", "either": "either",
-                     "bright": "bright", "dark": "dark"}
+                     "bright": "bright", "dark": "dark", None: None}
 
 
 @dataclass
@@ -143,8 +143,11 @@ class Pattern:
                  outline=None, closed=True, edge_mask=None, config: Config | None = None):
         gray, colour, alpha, path = _pio.grey_and_colour(
             image, bit_depth=None if config is None else config.bit_depth)
-        if mask is None and kind == "image":
+        cut_out = mask is None and kind == "image" and alpha is not None
+        if cut_out:
             mask = alpha      # (a cut-out: its transparent pixels are not the object)
+        if polarity is None:  # (a cut-out's border is against pixels no one sees: either)
+            polarity = "either" if cut_out else "bright"
         try:
             self._setup(gray, mask, origin, polarity, kind, outline, closed, edge_mask, config,
                         colour)
@@ -221,7 +224,7 @@ class Pattern:
 
     # ------------------------------------------------------------ constructors
     @classmethod
-    def from_image(cls, image, mask=None, origin=None, *, polarity="same",
+    def from_image(cls, image, mask=None, origin=None, *, polarity=None,
                    config: Config | None = None) -> "Pattern":
         """A pattern from a photo of the object (a path or an array).
 
@@ -234,13 +237,15 @@ class Pattern:
         mask : path or ndarray, optional
             Non-zero on the object's pixels; edges outside it (dilated by two
             pixels, so the object's border counts) are ignored. Default: a
-            BGRA image's alpha, when some pixels are transparent (a cut-out:
-            its border's contrast is against the pixels under them).
+            BGRA image's alpha, when some pixels are transparent (a cut-out).
         origin : (x, y), optional
             Pattern origin in its pixel coordinates; default the image centre.
-        polarity : {"same", "inverted", "either"}
+        polarity : {"same", "inverted", "either"}, optional
             Whether the object appears with the same contrast as in the
-            pattern image, inverted, or either way.
+            pattern image, inverted, or either way. Default: "same"; for a
+            cut-out, "either" (its border's contrast is against the pixels
+            under its transparent ones, black often, not against the ground
+            it will lie on: a dark object cut out on black was not found).
         config : Config, optional
             The configuration it will be searched with: the pattern must have
             edges under it (an object told from its surroundings by colour

@@ -33,6 +33,9 @@ def grey_and_colour(image, name: str = "pattern", bit_depth: int | None = None):
     alpha = None
     if isinstance(image, np.ndarray) and image.ndim == 3 and image.shape[2] == 4:
         a = image[..., 3]
+        if a.max() <= 0:
+            raise PatternError(f"{name}: its alpha channel is 0 everywhere: every pixel is "
+                               "transparent (give its pixels an alpha, or drop the channel)")
         if a.min() < a.max():
             alpha = a > 0
     colour = to_image(image, True, name=name, bit_depth=bit_depth)
