@@ -7,6 +7,7 @@ import functools
 import json
 import math
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -725,6 +726,9 @@ def test_sigterm_stops_the_command_like_ctrl_c_and_the_run_resumes(tmp_path):
                                                     "term")
     assert proc.returncode == 143, err
     assert err.count("\n") == 1 and "terminated (SIGTERM)" in err and "Traceback" not in err
+    # (what was kept, as Ctrl-C says it: a trial saw SIGTERM's line without the count)
+    assert re.search(r"terminated \(SIGTERM\): \d+ frames? kept in .*odometry\.csv; the same "
+                     r"command with --resume goes on from there", err), err
     _resumes_to(folder, out, full)
 
 

@@ -26,7 +26,7 @@ import click
 
 from .. import __version__
 from ..errors import SeahoughError
-from ._common import PROG, _err, _Fail, _interrupted
+from ._common import PROG, _err, _Fail, _interrupted, _Terminated
 
 __all__ = ["cli", "main"]
 
@@ -122,13 +122,6 @@ def cli():
     """
 
 
-
-
-class _Terminated(BaseException):
-    """SIGTERM (``kill``, a batch system's time limit, ``docker stop``),
-    raised where Ctrl-C would be: what Ctrl-C keeps is kept (the work's
-    ``finally`` clauses run; a BaseException, not a KeyboardInterrupt, so
-    that click does not take it for a Ctrl-C at a prompt)."""
 
 
 _TERM_MESSAGE = ("terminated (SIGTERM); what was done is kept (seahough survey: the same "
@@ -237,8 +230,8 @@ def _run(argv) -> int:
             msg += f" (see '{ctx.command_path} --help')"
         _err(msg)
         rv = e.exit_code
-    except _Terminated:
-        _err(_TERM_MESSAGE)
+    except _Terminated as e:   # (a command may say what it kept, as for Ctrl-C)
+        _err(f"terminated (SIGTERM): {e.args[0]}" if e.args and e.args[0] else _TERM_MESSAGE)
         rv = 143
     except (click.exceptions.Abort, KeyboardInterrupt) as e:
         # (a command may say what it kept: a survey's images searched)

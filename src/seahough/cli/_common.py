@@ -68,6 +68,26 @@ _problem = without_name
 _interrupted = interrupted   # (the name the CLI modules use)
 
 
+class _Terminated(BaseException):
+    """SIGTERM (``kill``, a batch system's time limit, ``docker stop``),
+    raised where Ctrl-C would be: what Ctrl-C keeps is kept (the work's
+    ``finally`` clauses run; a BaseException, not a KeyboardInterrupt, so
+    that click does not take it for a Ctrl-C at a prompt)."""
+
+
+def _say_kept(e: BaseException, said: str):
+    """Raise the interruption ``e`` of a command again with what it kept
+    (``said``): Ctrl-C as KeyboardInterrupt(said), SIGTERM as
+    _Terminated(said) (also from inside a compiled kernel, a SystemError
+    caused by either: a trial saw SIGTERM's message without the count that
+    Ctrl-C gives); anything else as it is."""
+    if isinstance(e, _Terminated) or (isinstance(e, SystemError) and _interrupted(e, _Terminated)):
+        raise _Terminated(said) from None
+    if isinstance(e, KeyboardInterrupt) or (isinstance(e, SystemError) and _interrupted(e)):
+        raise KeyboardInterrupt(said) from None
+    raise e
+
+
 def _out_dir(out: str) -> Path:
     """The ``--out`` folder, created (a :class:`_Fail` when it cannot be)."""
     o = Path(out)

@@ -10,7 +10,7 @@ import click
 import numpy as np
 
 from ..io.frames import printable
-from ._common import (_Fail, _dumps, _interrupted, _range_callback, _stderr_is_terminal,
+from ._common import (_Fail, _dumps, _range_callback, _say_kept, _stderr_is_terminal, _Terminated,
                       bit_depth_option, workers_option)
 
 
@@ -188,12 +188,10 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
                               progress=not quiet and _stderr_is_terminal(),
                               mosaic=not no_mosaic, workers=workers, fps=fps,
                               **_config(bit_depth, equalize))
-    except (KeyboardInterrupt, SystemError) as e:
+    except (KeyboardInterrupt, _Terminated, SystemError) as e:
         # (Ctrl-C inside a compiled kernel is a SystemError caused by it: what
         # was kept is said the same way; a trial saw a bare "interrupted")
-        if isinstance(e, SystemError) and not _interrupted(e):
-            raise
-        raise KeyboardInterrupt(_kept(out)) from None
+        _say_kept(e, _kept(out))
     return report(result, time.perf_counter() - t0, unit, as_json)
 
 

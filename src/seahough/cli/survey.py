@@ -18,7 +18,7 @@ from types import SimpleNamespace
 import click
 
 from ..io.frames import printable
-from ._common import (_Fail, _dumps, _interrupted, _stderr_is_terminal, make_detector,
+from ._common import (_Fail, _dumps, _say_kept, _stderr_is_terminal, _Terminated, make_detector,
                       workers_option)
 
 __all__ = ["survey"]
@@ -165,12 +165,10 @@ def detect(pattern, inputs, out, workers, scheduler, batch_size, retry_errors, a
                             scheduler=scheduler, batch_size=batch_size,
                             progress=not quiet and _stderr_is_terminal(),
                             retry_errors=retry_errors)
-    except (KeyboardInterrupt, SystemError) as e:
+    except (KeyboardInterrupt, _Terminated, SystemError) as e:
         # (Ctrl-C inside a compiled kernel is a SystemError caused by it: what
         # was kept is said the same way; a trial saw a bare "interrupted")
-        if isinstance(e, SystemError) and not _interrupted(e):
-            raise
-        raise KeyboardInterrupt(_kept(out)) from None
+        _say_kept(e, _kept(out))
     errors = _errors(result.images, SHOW_ERRORS) if result.errors else []
     summary = {"images": result.total, "found": result.found, "not_found": result.not_found,
                "errors": result.errors, "detections": result.n_detections,
@@ -274,11 +272,9 @@ def odometry(frames, out, workers, scheduler, chunk_size, as_json, quiet, **opts
                     angle_range=opts["angle_range"], mosaic=not opts["no_mosaic"],
                     progress=not quiet and _stderr_is_terminal(), fps=opts["fps"],
                     **_config(opts["bit_depth"], opts["equalize"]))
-    except (KeyboardInterrupt, SystemError) as e:
+    except (KeyboardInterrupt, _Terminated, SystemError) as e:
         # (as survey detect says what it kept: a trial saw a bare "interrupted")
-        if isinstance(e, SystemError) and not _interrupted(e):
-            raise
-        raise KeyboardInterrupt(_chunks_kept(out)) from None
+        _say_kept(e, _chunks_kept(out))
     unit = "m" if (mpp is not None or altitude is not None) else "px"
     return report(_odometry_result(paths), time.perf_counter() - t0, unit, as_json)
 
