@@ -96,6 +96,8 @@ def settings_changes(old: dict, new: dict) -> list[str]:
     ['scale_range [0.9, 1.1] (now [0.8, 1.2])']
     >>> settings_changes({"metres_per_pixel": 0.0025}, {"metres_per_pixel": 0.00375})
     ['metres_per_pixel 0.0025 (now 0.00375; given, or altitude / focal length in pixels)']
+    >>> settings_changes({"fps": None}, {"fps": 5.0})
+    ['fps not given (now 5.0)']
     >>> [c.split()[0] for c in settings_changes({"angle_range": [0, 1], "pattern": {"kind": "a"}},
     ...                                         {"angle_range": [0, 2], "pattern": {"kind": "b"}})]
     ['pattern.kind', 'angle_range']
@@ -104,7 +106,10 @@ def settings_changes(old: dict, new: dict) -> list[str]:
     # (the pattern first: a survey of another pattern said "angle_range null (now
     # [0.0, 360.0]); ...; and 151 more", the pattern among the 151)
     keys = sorted(set(a) | set(b), key=lambda k: (not k.startswith("pattern"), k))
-    return [f"{k} {json.dumps(a.get(k))} (now {json.dumps(b.get(k))}{_HOW.get(k, '')})"
+    def said(v):   # (JSON's "null" said "fps null (now 5.0)": not given)
+        return "not given" if v is None else json.dumps(v)
+
+    return [f"{k} {said(a.get(k))} (now {said(b.get(k))}{_HOW.get(k, '')})"
             for k in keys if a.get(k) != b.get(k)]
 
 
