@@ -30,17 +30,17 @@ def grey_and_colour(image, name: str = "pattern", bit_depth: int | None = None):
     if isinstance(image, (str, os.PathLike)):
         name = path = str(image)
         image = read_image(image)
+    colour = to_image(image, True, name=name, bit_depth=bit_depth)
+    grey = to_gray(image, name=name, bit_depth=bit_depth)      # (both check the image first)
     alpha = None
     if isinstance(image, np.ndarray) and image.ndim == 3 and image.shape[2] == 4:
-        a = image[..., 3]
+        a = np.nan_to_num(image[..., 3].astype(np.float64))
         if a.max() <= 0:
             raise PatternError(f"{name}: its alpha channel is 0 everywhere: every pixel is "
                                "transparent (give its pixels an alpha, or drop the channel)")
         if a.min() < a.max():
             alpha = a > 0
-    colour = to_image(image, True, name=name, bit_depth=bit_depth)
-    return (to_gray(image, name=name, bit_depth=bit_depth),
-            (colour if colour.ndim == 3 else None), alpha, path)
+    return grey, (colour if colour.ndim == 3 else None), alpha, path
 
 
 def outline_from_mask(mask, shape) -> list:
