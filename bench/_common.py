@@ -78,8 +78,15 @@ def command() -> str:
     ...             "--out=" + os.path.join(away, "r.md"), "--n", "4"]
     >>> command()
     'python bench/x.py --cache rs.cache --out=r.md --n 4'
+    >>> sys.argv = [os.path.join(os.path.dirname(os.path.abspath(__file__)), "x.py"), "--write"]
+    >>> command()                        # (a bench script run from another folder: as from here)
+    'python bench/x.py --write'
     """
-    return "python " + " ".join([os.path.relpath(sys.argv[0])] + [_shown(a) for a in sys.argv[1:]])
+    script = os.path.abspath(sys.argv[0])
+    here = os.path.dirname(os.path.abspath(__file__))    # (the bench folder)
+    shown = (os.path.join("bench", os.path.relpath(script, here)) if
+             os.path.dirname(script) == here else os.path.relpath(sys.argv[0]))
+    return "python " + " ".join([shown] + [_shown(a) for a in sys.argv[1:]])
 
 
 def steady_allocator() -> str:
