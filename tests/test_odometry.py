@@ -359,6 +359,27 @@ def test_fps_times_frames_whose_names_carry_none(tmp_path):
             run_odometry(folder, tmp_path / "b", progress=False, fps=bad)
 
 
+def test_frames_named_by_time_of_day_across_midnight_are_said(tmp_path, caplog):
+    """Times of day without a date: a dive across midnight sorts its frames
+    after it first (a trial: the track turned back, every frame "measured");
+    a note says so, and a dive within one day gets none."""
+    for name in ("f_23_59_59.000.png", "f_23_59_59.500.png", "f_00_00_00.000.png",
+                 "f_00_00_00.500.png"):
+        cv2.imwrite(str(tmp_path / name), np.zeros((16, 16), np.uint8))
+    with caplog.at_level("WARNING", logger="seahough.io"):
+        names = [Path(p).name for p in list_frames(tmp_path)]
+    assert names[0] == "f_00_00_00.000.png"                 # (the order of the day, as said)
+    [note] = [r.getMessage() for r in caplog.records]
+    assert "jump by 24.0 h between f_00_00_00.500.png and f_23_59_59.000.png" in note
+    assert "a dive across midnight?" in note
+    caplog.clear()
+    (tmp_path / "f_00_00_00.000.png").unlink()
+    (tmp_path / "f_00_00_00.500.png").unlink()
+    with caplog.at_level("WARNING", logger="seahough.io"):
+        list_frames(tmp_path)
+    assert not caplog.records
+
+
 def test_a_folder_says_what_it_does_not_read(tmp_path, caplog):
     # subfolders (not searched inside), videos and picture formats it cannot
     # read were left out without a word; a navigation log is no frame

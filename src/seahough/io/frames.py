@@ -165,6 +165,21 @@ def _video_frames(path: Path) -> list[str]:
     return [f"{path}#{i}" for i in range(n)]
 
 
+def _say_midnight(folder, names: list, times: list) -> None:
+    """A note when frames named by their time of day (no date) jump by
+    over 12 hours: a dive across midnight, whose frames after it sort first
+    (a trial: the track turned back on itself, every frame "measured")."""
+    if len(times) < 2 or max(times) >= 86400.0 + 1.0:   # (dates or Unix times: not this)
+        return
+    gaps = np.diff(times)
+    k = int(np.argmax(gaps))
+    if gaps[k] > 43200.0:
+        log.warning("note: %s: the frames' times of day jump by %.1f h between %s and %s: a "
+                    "dive across midnight? They are taken in order of time of day; name them "
+                    "with their date, or give them as a list in their order", printable(folder),
+                    gaps[k] / 3600.0, names[k], names[k + 1])
+
+
 def list_frames(frames) -> list:
     """The frames of ``frames`` in order, as a list.
 
@@ -226,6 +241,7 @@ def list_frames(frames) -> list:
             if all(t is not None for t in times):
                 order = sorted(range(len(files)),
                                key=lambda i: (times[i], _natural_key(files[i].name)))
+                _say_midnight(p, [files[i].name for i in order], [times[i] for i in order])
             else:
                 order = sorted(range(len(files)), key=lambda i: _natural_key(files[i].name))
             return [str(files[i]) for i in order]
