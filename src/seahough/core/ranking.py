@@ -251,10 +251,10 @@ def _full_res(ctx: SearchContext, fit: Fit, gray, where=None) -> Fit:
         (x0, y0, x1, y1), edges, index = where
         H, W = gray.shape[:2]  # (a colour image: HxWx3)
         local = Pose(pose.a, pose.b, pose.tx - x0, pose.ty - y0)
-        kw = dict(angle_tol=tol, either=p.either, fix_scale=ctx.scale_known,
-                  fix_angle=ctx.angle_known, score_radius=cfg.match_radius)
         f = refine(local, vx, vy, vang, edges, index,
-                   radii=(_full_radius(factor), 1.5) if cfg.refine else (), iterations=3, **kw)
+                   radii=(_full_radius(factor), 1.5) if cfg.refine else (), iterations=3,
+                   angle_tol=tol, either=p.either, fix_scale=ctx.scale_known,
+                   fix_angle=ctx.angle_known, score_radius=cfg.match_radius)
         q = f.pose
         # the share inside the image is measured on the whole image, not the crop
         mx, my = Pose(q.a, q.b, q.tx + x0, q.ty + y0).map(vx, vy)
