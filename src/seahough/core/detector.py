@@ -186,11 +186,11 @@ class Detector:
         self.config = Config() if config is None else config
         if not isinstance(self.config, Config):
             raise ParameterError("config must be a seahough.Config")
-        # Config.colour None: in colour when the pattern is painted, either
-        # polarity (a colour edge's sign is that of the channel that changes
-        # most across it, which depends on the ground, and the pattern image
-        # shows one); a grey image (no colour to see) is then searched by the
-        # pattern's grey edges, with its own polarity (self._grey)
+        # Config.colour None: in colour when the pattern is painted; a marker
+        # (long borders) at either polarity (a colour edge's sign depends on
+        # the ground); a photo's crop brings its ground: its own (a pool
+        # frame's crop, at either, lost its own frame); a grey image: the
+        # pattern's grey edges, its own polarity (self._grey)
         self._grey = None
         auto = self.config.colour is None and not self.parts
         if auto:
@@ -215,7 +215,7 @@ class Detector:
             self._grey = copy.copy(self)
             self._grey.config = self.config.replace(colour=False)
             self._grey._gaps = Memo()
-            if pattern.polarity != "either":
+            if pattern.polarity != "either" and pattern.has_long_borders(self.config):
                 self.pattern = copy.copy(pattern)
                 self.pattern.polarity, self.pattern._cache = "either", Memo()
         if self.parts:   # one Config for all: they share the image's features
