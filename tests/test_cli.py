@@ -150,8 +150,11 @@ def test_detect_csv_holds_what_json_holds(scenes, tmp_path):
     assert abs(float(found[0]["x"]) - truth.x) < 2
     (neg,) = [r for r in rows if r["file"].endswith("neg.png")]   # one row, nothing found
     assert neg["found"] == "false" and neg["rank"] == "" and neg["x"] == ""
-    # ... its best declined candidate's reason, as the JSON has it; a detection's row: none
-    assert neg["declined"] == (recs[1]["best_declined"] or {}).get("declined", "")
+    # ... its best declined candidate's reason, as the JSON has it, and as the table the
+    # option that would let it through (a user trial: the CSV dropped it); a detection: none
+    assert neg["declined"].startswith((recs[1]["best_declined"] or {}).get("declined", "-"))
+    assert neg["declined"].endswith(("(option --min-score)", "(option --max-nfa)",
+                                     "(far under it: the pattern may not be in view)"))
     assert neg["declined"] and all(r["declined"] == "" for r in found)
     assert all(r["frame"] == "" for r in rows) and "frame" not in recs[0]   # (files: none)
     # a name with a line break, a comma and a quote stays one field
@@ -309,9 +312,14 @@ def test_bit_depth_option_reads_twelve_bit_files(tmp_path):
     said = [line for line in proc.stderr.splitlines() if "a 16-bit image" in line]
     assert len(said) == 1 and str(p) in said[0] and "--bit-depth 12" in said[0], proc.stderr
     assert said[0].startswith("seahough: warning: ")      # (one line, not "seahough:0: ...")
+    # ... and in each image's own record (a spreadsheet of the CSV showed "not found" alone)
+    recs = [json.loads(line) for line in proc.stdout.splitlines()]
+    assert all("reach only" in r["warning"] and "--bit-depth" in r["warning"] for r in recs)
+    rows = list(csv.DictReader(io.StringIO(run("detect", "circle:16", p, "--csv").stdout)))
+    assert rows and all("reach only" in r["warning"] for r in rows)
     proc = run("detect", "circle:16", p, "--json", "--bit-depth", "12", "--out", tmp_path / "pics")
     assert proc.returncode == 0 and len(json.loads(proc.stdout)["detections"]) == 3
-    assert "a 16-bit image" not in proc.stderr
+    assert "a 16-bit image" not in proc.stderr and "warning" not in json.loads(proc.stdout)
     # the overlay draws the photo as the search read it, not 16 times too dark
     middle = [cv2.imread(str(tmp_path / d / "b12_overlay.png"), cv2.IMREAD_GRAYSCALE)
               for d in ("dark", "pics")]
@@ -545,8 +553,15 @@ def test_several_patterns_say_which_found_nothing(tmp_path):
     rec = json.loads(run("detect", "box=rect:120,80+disc=circle:20", tmp_path / "r.png",
                          "--json").stdout)
     assert rec["found"] and rec["not_found"] == ["disc"]
+    assert list(rec["best_declined_by_pattern"]) == ["disc"]
+    assert rec["best_declined_by_pattern"]["disc"]["pattern"] == "disc"
     one = json.loads(run("detect", "rect:120,80", tmp_path / "r.png", "--json").stdout)
-    assert "not_found" not in one
+    assert "not_found" not in one and "best_declined_by_pattern" not in one
+    # CSV: the detections, then a row for the pattern that found nothing, with why
+    rows = list(csv.DictReader(io.StringIO(run("detect", "box=rect:120,80+disc=circle:20",
+                                                 tmp_path / "r.png", "--csv").stdout)))
+    assert [(r["found"], r["pattern"]) for r in rows] == [("true", "box"), ("false", "disc")]
+    assert rows[1]["declined"] and rows[1]["x"] == "" and rows[1]["rank"] == ""
 
 
 def test_angles_near_360_are_printed_wrapped():
@@ -1079,8 +1094,25 @@ def test_not_found_shows_the_best_candidate_and_why(tmp_path):
     proc = run("detect", "a=rect:120,80@min-score=0.99+b=circle:30@min-score=0.99",
                tmp_path / "r.png")
     assert proc.returncode == 1
-    assert proc.stdout.splitlines()[1].startswith(("  best candidate, not reported: a: ",
-                                                   "  best candidate, not reported: b: "))
+    # ... one line for each (a RoboSub trial saw only one of two patterns' reasons), whose
+    # hint also names the pattern's own setting (the option sets every pattern's)
+    lines = proc.stdout.splitlines()
+    assert [ln[:34] for ln in lines[1:]] == ["  best candidate, not reported: a:",
+                                             "  best candidate, not reported: b:"], lines
+    assert lines[1].endswith("(option --min-score; for a alone: a=SPEC@min-score=...)"), lines[1]
+    rec = json.loads(run("detect", "a=rect:120,80@min-score=0.99+b=circle:30@min-score=0.99",
+                         tmp_path / "r.png", "--json").stdout)
+    assert rec["not_found"] == ["a", "b"] and set(rec["best_declined_by_pattern"]) == {"a", "b"}
+    rows = list(csv.DictReader(io.StringIO(run(
+        "detect", "a=rect:120,80@min-score=0.99+b=circle:30@min-score=0.99", tmp_path / "r.png",
+        "--csv").stdout)))
+    assert [(r["found"], r["pattern"]) for r in rows] == [("false", "a"), ("false", "b")]
+    assert rows[0]["declined"].endswith("(option --min-score; for a alone: a=SPEC@min-score=...)")
+    # a scale outside the searched range names the option that sets it
+    from types import SimpleNamespace as C
+    from seahough.cli._records import _option_hint
+    assert _option_hint(C(score=0.8, declined="scale 0.338 outside 0.4-2.5 (the searched "
+                          "range and its slack)", pattern="")) == " (option --scale-range)"
 
 
 def test_detect_takes_a_folder_for_its_images(tmp_path):

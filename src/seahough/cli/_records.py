@@ -112,7 +112,11 @@ def _best_declined_dict(c) -> dict | None:
 #: words of its reason (a user trial: the reason never named the option)
 _OPTION_OF = (("min_score", "--min-score"), ("max_nfa", "--max-nfa"),
               ("max_results", "--max-results"), ("min_confidence", "--min-confidence"),
-              ("min_length", "curve:WIDTH,PIECE_LENGTH,MIN_LENGTH"))
+              ("min_length", "curve:WIDTH,PIECE_LENGTH,MIN_LENGTH"),
+              ("the searched range", "--scale-range"))
+#: ... and its form for one pattern of several (``NAME=SPEC@key=value``)
+_OWN_OPTION = {"--min-score": "min-score", "--max-nfa": "max-nfa", "--max-results": "n",
+               "--min-confidence": "min-confidence", "--scale-range": "scale"}
 
 
 def _option_hint(c) -> str:
@@ -126,11 +130,16 @@ def _option_hint(c) -> str:
     ' (option --min-score)'
     >>> _option_hint(C(score=0.2, declined="score 0.2 (coarse) under 0.425 (0.85 x min_score)"))
     ' (far under it: the pattern may not be in view)'
+    >>> _option_hint(C(score=0.6, declined="NFA 3 over max_nfa 1", pattern="buoy"))
+    ' (option --max-nfa; for buoy alone: buoy=SPEC@max-nfa=...)'
     """
     option = next((o for words, o in _OPTION_OF if words in c.declined), None)
     bound = re.search(r"under (\d+(?:\.\d+)?(?:e[-+]?\d+)?)", c.declined)
     if option == "--min-score" and bound and c.score < 0.5 * float(bound.group(1)):
         return " (far under it: the pattern may not be in view)"
+    name = getattr(c, "pattern", "")
+    if option in _OWN_OPTION and name:    # (one of several: the option sets them all)
+        return f" (option {option}; for {name} alone: {name}=SPEC@{_OWN_OPTION[option]}=...)"
     return f" (option {option})" if option else ""
 
 
@@ -151,16 +160,16 @@ def _best_declined_line(c) -> str:
 CSV_COLUMNS = ("file", "width", "height", "found", "note", "time_ms", "rank", "pattern", "kind",
                "x", "y", "scale", "angle", "score", "confidence", "nfa", "flags", "line_angle",
                "line_offset", "width_px", "length", "votes", "matrix", "points", "declined",
-               "frame", "error")
+               "frame", "error", "warning")
 
 
 def error_row(name: str, problem: str) -> str:
     """The CSV line of an image that could not be read or searched.
 
-    >>> error_row("a.png", "truncated PNG").split(",")[-3:]
-    ['', '', 'truncated PNG']
+    >>> error_row("a.png", "truncated PNG").split(",")[-4:]
+    ['', '', 'truncated PNG', '']
     """
-    row = [name] + [""] * (len(CSV_COLUMNS) - 3) + [_frame(name), problem]
+    row = [name] + [""] * (len(CSV_COLUMNS) - 4) + [_frame(name), problem, ""]
     return _csv_line(row)
 
 
@@ -177,23 +186,27 @@ def _csv_line(values) -> str:
     return buf.getvalue()[:-2]
 
 
-def _csv_rows(name, w, h, note, ms, dets, near=None):
-    """The CSV lines of one image (:data:`CSV_COLUMNS`); ``near``: the best
-    declined candidate of an image without detections (its row's
-    ``declined``: why it was not reported)."""
+def _csv_rows(name, w, h, note, ms, dets, nears=(), warning=""):
+    """The CSV lines of one image (:data:`CSV_COLUMNS`): a row per detection,
+    then a row (found false) per pattern that found nothing, with its best
+    declined candidate's pattern and why it was not reported (and the option
+    that would let it through) in ``declined``; ``nears``: ``(pattern name,
+    that candidate or None)`` pairs. An image without detections has one
+    such row at least. ``warning``: about the image's values (every row)."""
     head = [name, int(w), int(h), "true" if dets else "false", note, round(ms, 3)]
-    if not dets:
-        why = near.declined if near is not None else ""
-        return [_csv_line(head + [""] * (len(CSV_COLUMNS) - len(head) - 3)
-                          + [why, _frame(name), ""])]
     out = []
     for rank, d in enumerate(dets, 1):
         rec = d.to_dict()
         rec["width_px"] = rec.pop("width", None)   # (a curve's width, not the image's)
         row = head + [rank]
-        for col in CSV_COLUMNS[7:-3]:
+        for col in CSV_COLUMNS[7:-4]:
             v = rec.get(col)
             row.append("" if v is None else json.dumps(v, separators=(",", ":"))
                        if isinstance(v, (list, tuple, dict)) else v)
-        out.append(_csv_line(row + ["", _frame(name), ""]))
+        out.append(_csv_line(row + ["", _frame(name), "", warning]))
+    blank = [""] * (len(CSV_COLUMNS) - len(head) - 6)
+    for who, near in nears if dets else (list(nears) or [("", None)]):
+        why = near.declined + _option_hint(near) if near is not None else ""
+        out.append(_csv_line(head[:3] + ["false"] + head[4:] + ["", who] + blank
+                             + [why, _frame(name), "", warning]))
     return out

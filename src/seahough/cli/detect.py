@@ -108,9 +108,17 @@ def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir,
     try:
         img = image if image is not None else read_image(
             name, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
+        bits = ""
         if img.dtype.name == "uint16" and cfg.bit_depth is None:   # (said with its file's name)
-            say_bits(int(img.max(initial=0)), name)
+            top = int(img.max(initial=0))
+            say_bits(top, name)
+            # (and in its own record: the warning is said once a run, on stderr; a table
+            # read in a spreadsheet showed a 12-bit camera's photos as "not found")
+            if 0 < top < 4096:
+                bits = (f"16-bit values reach only {top}: a camera's "
+                        f"{max(top.bit_length(), 10)}-bit samples? (--bit-depth)")
         res = detector.search(img)
+        res.warning = bits
     except SeahoughError as e:
         return e
     ms = 1000.0 * (time.perf_counter() - t0)
@@ -136,7 +144,8 @@ def _paint_notes(detector, colour, polarity=None) -> list:
     out = []
     for name, d in (detector.parts.items() if detector.parts else [("", detector)]):
         p = getattr(d, "pattern", None)
-        if p is not None and p.painted and colour is None and polarity not in (None, "either"):
+        if (p is not None and p.painted and colour is None and polarity not in (None, "either")
+                and p.has_long_borders(d.config)):     # (a photo's crop: its own polarity)
             out.append(f"note: {name or 'the pattern'}: painted, searched by its colour edges "
                        f"at either polarity (--polarity {polarity} applies with --grey, or "
                        "with --colour)")
@@ -368,7 +377,9 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, draw=None, b
 @click.option("--csv", "as_csv", is_flag=True,
               help="CSV instead of tables: a header, then a row per detection (an image with "
               "none: one row, found false, and in its column declined why the best "
-              "candidate was not reported); lists (flags, matrix, points) as JSON text; a "
+              "candidate was not reported, and the option that would let it through; several "
+              "patterns: such a row for each that found nothing, naming it in pattern); "
+              "lists (flags, matrix, points) as JSON text; a "
               "video's frames: its number in frame (JSON too).")
 @click.option("--out", "-o", type=click.Path(file_okay=False), default=None,
               help="Write pictures per image here: <stem>_overlay.png (detections), "
@@ -538,8 +549,11 @@ def _report(outcomes, bar, say, form: str, quiet: bool) -> tuple[int, int]:
         if not dets:
             n_missing += 1
         if form == "csv":
-            for line in _csv_rows(name, w, h, res.note, ms, dets,
-                                  None if dets else best_declined(res)):
+            parts = getattr(res, "parts", None)   # (several: each one not found)
+            nears = ([(p, best_declined(res.parts[p])) for p in patterns_not_found(res)]
+                     if parts else [] if dets else [("", best_declined(res))])
+            for line in _csv_rows(name, w, h, res.note, ms, dets, nears,
+                                  getattr(res, "warning", "")):
                 say(line)
             if failed is not None:
                 say.error(printable(str(failed)))
@@ -551,8 +565,14 @@ def _report(outcomes, bar, say, form: str, quiet: bool) -> tuple[int, int]:
                    "best_declined": None if dets else _best_declined_dict(best_declined(res)),
                    "captions": _captions(res), "ignored": _ignored(res),
                    "left_out": getattr(res, "left_out", 0), "time_ms": round(ms, 3)}
+            if getattr(res, "warning", ""):       # (about the image's values: 12-bit data...)
+                rec["warning"] = res.warning
             if getattr(res, "parts", None):       # (a curve search's result has none)
                 rec["not_found"] = patterns_not_found(res)
+                # (each of those: its best candidate and why not; best_declined: the best)
+                rec["best_declined_by_pattern"] = {
+                    pname: _best_declined_dict(best_declined(res.parts[pname]))
+                    for pname in rec["not_found"]}
             if split_video_ref(name) is not None:
                 rec["frame"] = _frame(name)
             rec.update(written)
@@ -578,9 +598,11 @@ def _report(outcomes, bar, say, form: str, quiet: bool) -> tuple[int, int]:
                             say(printable(_best_declined_line(near)))
             else:
                 say(f"{printable(name)}  {w}x{h}  not found{why}  ({ms:.0f} ms)")
-                near = best_declined(res)
-                if near is not None and not quiet:
-                    say(printable(_best_declined_line(near)))
+                # (several patterns: each one's best candidate, as when one is found)
+                parts = getattr(res, "parts", None) or {"": res}
+                for near in (best_declined(part) for part in parts.values()):
+                    if near is not None and not quiet:
+                        say(printable(_best_declined_line(near)))
             if written and not quiet:
                 say("  wrote " + ", ".join(printable(v) for v in written.values()))
         if failed is not None:
