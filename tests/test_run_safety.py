@@ -394,6 +394,31 @@ def test_links_loops_and_folders_among_the_frames_get_flagged_rows(tmp_path):
     assert res.summary["unreadable_frames"] == 4
 
 
+
+def test_a_broken_link_in_a_list_of_frames_or_images_is_named_and_flagged(tmp_path):
+    """A user trial: a broken link named on the command line (a shell glob
+    over the frames' folder) refused the whole odometry run as "no such file
+    or folder", and detect called it "no such file", though the folder
+    shows it; a folder's broken link was a flagged row. Now a listed one is
+    flagged the same way, and named for what it is."""
+    folder = tmp_path / "frames"
+    _write(_frames(4), folder)
+    (folder / "f_002.png").unlink()
+    (folder / "f_002.png").symlink_to(tmp_path / "gone.png")
+    paths = sorted(folder.iterdir())
+    proc = cli("odometry", *paths, "--out", tmp_path / "out", "-q")
+    assert proc.returncode == 1, proc.stderr            # (a frame flagged, the run done)
+    rows = list(csv.DictReader(open(tmp_path / "out" / "odometry.csv")))
+    assert rows[2]["status"] == "unreadable" and "broken symbolic link" in rows[2]["flags"]
+    assert all(rows[i]["status"] in ("origin", "measured") for i in (0, 1, 3))
+    with pytest.raises(seahough.ImageReadError, match=r"f_002.png: broken symbolic link \(to "):
+        seahough.read_image(folder / "f_002.png")
+    proc = cli("detect", "circle:10", folder / "f_002.png")
+    assert proc.returncode == 2 and "broken symbolic link" in proc.stderr, proc.stderr
+    # a path that is not there at all is still a typo: nothing is started
+    proc = cli("odometry", *paths, folder / "f_009.png", "--out", tmp_path / "out2", "-q")
+    assert proc.returncode == 2 and "no such file" in proc.stderr
+
 # ------------------------------------------------------------ 5. frames too small
 def test_frames_too_small_to_measure_are_refused():
     from seahough.motion.pair import MIN_MOTION_SIDE

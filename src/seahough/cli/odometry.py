@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 import time
 from pathlib import Path
 
@@ -234,7 +235,7 @@ def check_inputs(frames, metres_per_pixel, altitude, focal_px) -> None:
     if (altitude is None) != (focal_px is None):
         raise click.UsageError("--altitude and --focal-px go together")
     for f in frames:
-        if not Path(f).exists():
+        if not Path(f).exists() and not os.path.islink(f):   # (a broken link: flagged)
             raise _Fail(f"{printable(f)}: no such file or folder")
 
 

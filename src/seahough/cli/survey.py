@@ -11,6 +11,7 @@ from __future__ import annotations
 import csv
 import importlib
 import json
+import os
 import time
 from pathlib import Path
 from types import SimpleNamespace
@@ -158,7 +159,7 @@ def detect(pattern, inputs, out, workers, scheduler, batch_size, retry_errors, a
     # a path typed on the command line that is not there is a typo, not a photo
     # that failed: nothing is started (paths in @LIST files get error rows)
     for item in inputs:
-        if not item.startswith("@") and not Path(item).exists():
+        if not item.startswith("@") and not Path(item).exists() and not os.path.islink(item):
             raise _Fail(f"{printable(item)}: no such file or folder")
     try:
         result = run_survey(detector, list(inputs), out, workers=workers,

@@ -256,7 +256,8 @@ def list_frames(frames) -> list:
             if Path(s).is_dir():
                 raise ParameterError(f"{s}: a folder inside a list of frames; give the "
                                      "folder alone")
-            if not Path(s).exists() and split_video_ref(s) is None:
+            # (a broken link is listed, not a typo: its frame is flagged as unreadable)
+            if not Path(s).exists() and not os.path.islink(s) and split_video_ref(s) is None:
                 raise ParameterError(f"{s}: no such file")
             if _is_video(Path(s)) and Path(s).is_file():
                 out.extend(_video_frames(Path(s)))   # each video of a list: its frames
