@@ -237,6 +237,21 @@ def test_pattern_without_edges_is_refused():
         seahough.Pattern.from_image(np.full((40, 40), 90, np.uint8))
 
 
+def test_a_pattern_lost_at_a_large_images_working_scale_says_why():
+    """A user trial: a 115 px crop searched at scale 6-12 in a 6000 px photo
+    was refused as having "too few edges at scale 0.05", and the pattern was
+    fine: the image was brought down to 320 px, and the pattern with it. The
+    error says so, and what to do; at full size nothing is added."""
+    img = np.full((2000, 3000), 90, np.uint8)
+    cv2.rectangle(img, (1000, 800), (1240, 960), 200, -1)
+    with pytest.raises(PatternError, match=r"too few edges .*; the 3000x2000 image is searched at "
+                       r"scale 0\.11 .*Config\.target_size.*scale range starts at 5.*--downscale"):
+        seahough.Detector(seahough.Pattern.rectangle(40, 28), (5, 8)).detect(img)
+    from seahough.core.preprocess import factor_hint
+    assert factor_hint((2000, 3000), 1.0, seahough.Config(), 5) == ""
+    assert factor_hint((2000, 3000), 0.2, seahough.Config(downscale=0.2), 5) == ""
+
+
 @pytest.mark.parametrize("kw", [
     dict(scale_range=(2.0, 1.0)), dict(scale_range=(0, 2)), dict(scale_range=(0.5, float("nan"))),
     dict(angle_range=(10, 5)), dict(angle_range="any"), dict(max_results=0),

@@ -27,7 +27,7 @@ from .candidates import PoseComparison, SearchContext, find_candidates
 from .features import Features, extract_features
 from .pattern import Pattern
 from .blanks import Blanks, find_blanks
-from .preprocess import MIN_BAND_PX, choose_factor, prepare_image
+from .preprocess import MIN_BAND_PX, choose_factor, factor_hint, prepare_image
 from .ranking import (FLAG_ALONG_LINE, FLAG_AMBIGUOUS, FLAG_GREY, FLAG_OUTSIDE_RANGE,
                       FLAG_PARTIAL, FLAG_RANGE_EDGE, Detection, confidence, line_parameters, rank)
 
@@ -186,11 +186,8 @@ class Detector:
         self.config = Config() if config is None else config
         if not isinstance(self.config, Config):
             raise ParameterError("config must be a seahough.Config")
-        # Config.colour None: in colour when the pattern is painted; a marker
-        # (long borders) at either polarity (a colour edge's sign depends on
-        # the ground); a photo's crop brings its ground: its own (a pool
-        # frame's crop, at either, lost its own frame); a grey image: the
-        # pattern's grey edges, its own polarity (self._grey)
+        # Config.colour None: in colour when painted, a marker (long borders) at either polarity
+        # (the ground decides), a photo's crop at its own; a grey image: grey edges (self._grey)
         self._grey = None
         auto = self.config.colour is None and not self.parts
         if auto:
@@ -342,7 +339,10 @@ class Detector:
         if s0 > fit:
             return SearchResult([], None, features, factor, [], timings,
                                 note="pattern larger than the image")
-        pf = p.features(factor, cfg)
+        try:
+            pf = p.features(factor, cfg)
+        except PatternError as e:   # (a large image brought down: the pattern with it)
+            raise PatternError(f"{e}{factor_hint(gray.shape, factor, cfg, s0)}") from None
         region = self._region(features, factor, s1)
         if region is None:
             return SearchResult([], None, features, factor, [], timings,
