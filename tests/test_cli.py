@@ -183,7 +183,8 @@ def test_detect_csv_holds_what_json_holds(scenes, tmp_path):
     assert proc.returncode == 2
     good, bad_rec = (json.loads(line) for line in proc.stdout.splitlines())
     assert good["found"] is True and "error" not in good
-    assert bad_rec == {"file": str(d / "notes.png"), "found": None, "error": bad["error"]}
+    assert bad_rec == {"file": str(d / "notes.png"), "found": None, "error": bad["error"],
+                       "detections": []}
 
 
 def test_detect_json_matches_python_api(scenes):
@@ -267,7 +268,7 @@ def test_bad_image_among_good_ones(scenes):
     err = proc.stderr.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"seahough: error: {d / 'notes.png'}: ")
     # the bad file's record: why, as on stderr (found: null, neither true nor false)
-    assert recs[1] == {"file": str(d / "notes.png"), "found": None,
+    assert recs[1] == {"file": str(d / "notes.png"), "found": None, "detections": [],
                        "error": err[0].split(f"{d / 'notes.png'}: ", 1)[1]}
     assert "Traceback" not in proc.stderr
 
@@ -1289,6 +1290,7 @@ def test_an_overlay_says_what_was_not_found_and_keeps_each_patterns_colour(tmp_p
     assert seen["a"]["title"] == "two.png: 2 detections; not found: post", seen["a"]
     assert seen["a"]["patterns"] == ["buoy", "post"]
     assert seen["b"]["title"].startswith("two.png: not found; best candidate: score ")
+    assert seen["b"]["title"].count("score") == 1 + seen["b"]["title"].count("min_score")
     assert seen["b"]["patterns"] is None
     from seahough.viz.detections import colours
     from types import SimpleNamespace as Det

@@ -208,7 +208,9 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, draw: Dr
     near = best_declined(res) if n == 0 and not res.note else None
     if near is not None:  # (what came closest, and why it was not reported)
         who = f"{near.pattern}, " if getattr(near, "pattern", "") else ""
-        head += f"; best candidate: {who}score {near.score:.2f}, {near.declined}"
+        # (its score once: a reason of "score ..." says it, a user trial read it twice)
+        score = "" if near.declined.startswith("score") else f"score {near.score:.2f}, "
+        head += f"; best candidate: {who}{score}{near.declined}"
     names = list(getattr(detector, "parts", None) or {}) or None
     ov = Path(f"{base}_overlay.png")
     if isinstance(detector, CurveSearch):    # curves: the overlay only
@@ -534,7 +536,9 @@ def _report(outcomes, bar, say, form: str, quiet: bool) -> tuple[int, int]:
             say.error(f"{printable(name)}: {printable(problem)}")
             # (and in the records: a JSON Lines or CSV reader keeps track of every image)
             if form == "json":
-                rec = {"file": name, "found": None, "error": problem}
+                # ("detections": [] too: pandas.json_normalize(recs, "detections") took
+                # every record to have it, a user trial)
+                rec = {"file": name, "found": None, "error": problem, "detections": []}
                 if split_video_ref(name) is not None:
                     rec["frame"] = _frame(name)
                 say(_dumps(rec))
