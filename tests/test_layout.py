@@ -56,3 +56,18 @@ def test_ci_runs_the_readme_test_command():
     assert command.startswith("python -m pytest") and command in ci.splitlines()
     install = setup.rpartition(" && ")[2]          # e.g. pip install -e ".[test]"
     assert install.replace("pip install", "python -m pip install --quiet") in ci
+
+
+def test_every_core_module_is_reachable_as_an_attribute():
+    """``seahough.core.nfa`` and the like load on first access (a
+    contributor found nfa, parts and symmetry missing: AttributeError unless
+    something had imported them first)."""
+    import subprocess
+    import sys
+
+    names = sorted(p.stem for p in (ROOT / "src" / "seahough" / "core").glob("*.py")
+                   if p.stem != "__init__") + ["kernels"]
+    code = ("import seahough.core as c; "
+            f"print([n for n in {names!r} if getattr(c, n).__name__ != 'seahough.core.' + n])")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0 and out.stdout.strip() == "[]", out.stdout + out.stderr

@@ -150,7 +150,7 @@ def solve_segment_pair(p1, p2, q1, q2) -> tuple[float, float, float, float]:
     c, d = q1[0] - q2[0], q1[1] - q2[1]
     n = a * a + b * b
     if n == 0:
-        raise ValueError("degenerate pattern segment: both ends coincide")
+        raise ParameterError("degenerate pattern segment: both ends coincide")
     rc = (a * c + b * d) / n
     rs = (b * c - a * d) / n
     rho = math.hypot(rc, rs)

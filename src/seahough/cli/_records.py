@@ -8,6 +8,7 @@ import io
 import json
 import math
 import re
+from pathlib import Path
 
 from ..core.detector import FLAG_ALONG_LINE
 from ..geometry import format_angle, format_line
@@ -210,3 +211,33 @@ def _csv_rows(name, w, h, note, ms, dets, nears=(), warning=""):
         out.append(_csv_line(head[:3] + ["false"] + head[4:] + ["", who] + blank
                              + [why, _frame(name), "", warning]))
     return out
+
+
+def picture_title(name: str, res, curves: bool = False) -> tuple:
+    """``(title, near)``: an overlay's title for the search ``res`` of the
+    image ``name`` (what was found, which patterns found nothing, and the
+    best candidate not reported, with why), and that candidate (None when
+    something was found). ``curves``: a curve search's."""
+    from ..core.candidates import best_declined
+
+    dets = res.detections
+    n = len(dets)
+    near = best_declined(res) if n == 0 and not res.note else None
+    if curves:
+        head = f"{Path(name).name}: " + (f"{n} curve{'s' if n > 1 else ''}" if n
+                                         else "no curve found")
+        if near is not None:
+            head += f"; best line: score {near.score:.2f}, {near.declined}"
+        return head, near
+    why = f" ({res.note})" if res.note else ""
+    head = f"{Path(name).name}: " + (f"not found{why}" if n == 0 else
+                                     f"{n} detection{'s' if n > 1 else ''}")
+    missing = patterns_not_found(res)
+    if n and missing:    # (several patterns: say which found nothing, as the table does)
+        head += f"; not found: {', '.join(missing)}"
+    if near is not None:  # (what came closest, and why it was not reported)
+        who = f"{near.pattern}, " if getattr(near, "pattern", "") else ""
+        # (its score once: a reason of "score ..." says it, a user trial read it twice)
+        score = "" if near.declined.startswith("score") else f"score {near.score:.2f}, "
+        head += f"; best candidate: {who}{score}{near.declined}"
+    return head, near

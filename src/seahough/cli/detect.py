@@ -23,9 +23,9 @@ from ..io.frames import (IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, FrameReader, list_f
 from ._common import (CurveSearch, _Output, _dumps, _max_nfa_callback, _out_dir, _problem,
                       _progress, _range_callback, bit_depth_option, default_workers,
                       ignore_boxes, make_detector, workers_option)
-from ._records import (CSV_COLUMNS, _best_declined_dict, _best_declined_line, _csv_line,
-                       _captions, _csv_rows, _detection_lines, _frame, _ignored,
-                       error_row, patterns_not_found)
+from ._records import (CSV_COLUMNS, _best_declined_dict, _best_declined_line, _captions,
+                       _csv_line, _csv_rows, _detection_lines, _frame, _ignored, error_row,
+                       patterns_not_found, picture_title)
 
 # the command's defaults are the library's, so that both give the same results
 _DET = {k: v.default for k, v in inspect.signature(Detector.__init__).parameters.items()}
@@ -198,26 +198,10 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, draw: Dr
     max_width, kinds = draw
 
     dets = res.detections
-    n = len(dets)
-    why = f" ({res.note})" if res.note else ""
-    head = f"{Path(name).name}: " + (f"not found{why}" if n == 0 else
-                                     f"{n} detection{'s' if n > 1 else ''}")
-    missing = patterns_not_found(res)
-    if n and missing:    # (several patterns: say which found nothing, as the table does)
-        head += f"; not found: {', '.join(missing)}"
-    near = best_declined(res) if n == 0 and not res.note else None
-    if near is not None:  # (what came closest, and why it was not reported)
-        who = f"{near.pattern}, " if getattr(near, "pattern", "") else ""
-        # (its score once: a reason of "score ..." says it, a user trial read it twice)
-        score = "" if near.declined.startswith("score") else f"score {near.score:.2f}, "
-        head += f"; best candidate: {who}{score}{near.declined}"
+    head, near = picture_title(name, res, isinstance(detector, CurveSearch))
     names = list(getattr(detector, "parts", None) or {}) or None
     ov = Path(f"{base}_overlay.png")
     if isinstance(detector, CurveSearch):    # curves: the overlay only
-        head = f"{Path(name).name}: " + (f"{n} curve{'s' if n > 1 else ''}" if n
-                                         else "no curve found")
-        if near is not None:
-            head += f"; best line: score {near.score:.2f}, {near.declined}"
         if "overlay" in kinds:
             plot.plot_curves(img, dets, ov, title=head, max_width=max_width,
                              bit_depth=detector.config.bit_depth, best=near)

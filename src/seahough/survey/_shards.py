@@ -96,8 +96,6 @@ DETECTIONS_SCHEMA = pa.schema([
     ("flags", pa.list_(pa.string())),
     ("pattern", pa.string()),       # the pattern's name ("" for a Detector of one pattern)
 ])
-_IMAGE_COLS = IMAGES_SCHEMA.names
-_DET_COLS = DETECTIONS_SCHEMA.names
 
 
 def image_row(index: int, path: str, status: str, n: int = 0, ms: float = 0.0,
