@@ -54,6 +54,9 @@ def refine(pose: Pose, vx, vy, vang, edges: EdgePoints, index: np.ndarray, *,
     least squares (Huber-like weights) for the similarity. The score is the
     share of the pattern points with such an edge within ``score_radius`` at
     the final pose. ``fix_scale``/``fix_angle`` keep a known quantity.
+    The defaults are a call's of its own; a search passes its settings
+    (``Config.angle_tolerance``, 15 degrees; ``SearchTuning.icp_iterations``,
+    4 a radius; radii from about one bin to 1.25 px: docs/method.md).
     """
     a, b, tx, ty, score, matched, rms, inside = K.icp(
         vx, vy, vang, float(pose.a), float(pose.b), float(pose.tx), float(pose.ty),
