@@ -324,3 +324,17 @@ def test_a_large_object_on_a_flat_ground_and_open_water_are_no_border():
     water[40:80, 200:260] = 90                      # a board near the top
     water[120:] += np.random.default_rng(2).uniform(-20, 20, (120, 320)).astype(np.float32)
     assert blank_border(water)[1] == 0
+
+
+def test_a_picture_framed_on_all_four_sides_has_that_border():
+    """A photo padded with black on every side (a user trial: a frame saved
+    inside a larger canvas): each side's bar reaches the others, so the step
+    into the picture runs only between them; the whole image was kept, and
+    a rectangle search locked onto the photo's edge (score 0.72)."""
+    rng = np.random.default_rng(3)
+    photo = cv2.GaussianBlur(rng.uniform(40, 200, (240, 320)), (0, 0), 1.5).astype(np.float32)
+    framed = cv2.copyMakeBorder(photo, 30, 30, 40, 40, cv2.BORDER_CONSTANT, value=0)
+    assert blank_border(framed) == (42, 32, 358, 268)
+    two = cv2.copyMakeBorder(photo, 30, 0, 40, 0, cv2.BORDER_CONSTANT, value=0)  # top, left
+    assert blank_border(two) == (42, 32, 360, 270)
+

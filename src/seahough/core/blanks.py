@@ -77,16 +77,24 @@ def blank_border(gray: np.ndarray) -> tuple[int, int, int, int]:
     def grey(a: np.ndarray) -> np.ndarray:      # (a colour image's lines only, not all of it)
         return _grey(a, colour)
 
-    def depth(lines: np.ndarray) -> int:
+    def flat_run(lines: np.ndarray) -> int:
         # lines: the side's outermost lines as rows, outermost first (most
-        # images: the first alone decides)
+        # images: the first alone decides); how many are flat (-1: all of them)
         if lines.shape[0] == 0 or grey(lines[0]).std() >= BLANK_STD:
             return 0
-        lines = grey(lines)
-        flat = lines.std(axis=1) < BLANK_STD
-        if flat.all():                # a quarter of the side flat: a scene's background
+        flat = grey(lines).std(axis=1) < BLANK_STD
+        return -1 if flat.all() else int(np.argmin(flat))
+
+    def depth(lines: np.ndarray, lo: int = 0, hi: int | None = None) -> int:
+        # (lo:hi: the part of the side between the bars of the sides across it, where
+        # the picture begins: a picture framed on all four sides, a user trial's)
+        n = flat_run(lines)
+        if n <= 0:                    # (-1: a quarter of the side flat: a background)
             return 0
-        n = int(np.argmin(flat))
+        framed = lo > 0 or (hi is not None and hi < lines.shape[1])
+        lines = grey(lines[:, lo:hi])
+        if framed and lines[n].std() < BLANK_STD:   # (a flat object on a flat ground)
+            return 0
         # a bar runs the whole side: beyond it, the picture departs from the band's
         # level all along (a drawn scene's flat background, level with the band, does
         # not where it passes beside an object)
@@ -98,9 +106,11 @@ def blank_border(gray: np.ndarray) -> tuple[int, int, int, int]:
         return n + BLANK_MARGIN
 
     ly, lx = int(h * BLANK_DEPTH), int(w * BLANK_DEPTH)
-    top, bottom = depth(g[:ly]), depth(g[h - ly:][::-1])
-    left = depth(np.swapaxes(g[:, :lx], 0, 1))
-    right = depth(np.swapaxes(g[:, w - lx:][:, ::-1], 0, 1))
+    sides = (g[:ly], g[h - ly:][::-1], np.swapaxes(g[:, :lx], 0, 1),
+             np.swapaxes(g[:, w - lx:][:, ::-1], 0, 1))          # top, bottom, left, right
+    t, b, l, r = (max(flat_run(s), 0) for s in sides)
+    top, bottom = depth(sides[0], l, w - r), depth(sides[1], l, w - r)
+    left, right = depth(sides[2], t, h - b), depth(sides[3], t, h - b)
     if not (top or bottom or left or right):
         return (0, 0, w, h)
     box = (left, top, w - right, h - bottom)

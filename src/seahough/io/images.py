@@ -36,6 +36,7 @@ from ..errors import (BitDepthWarning, ImageReadError, ImageSizeError, ImageValu
                       LevelsWarning, ParameterError, WriteError, warn_at_caller)
 from ._decoders import (_Header, _decode_jpeg, _decode_png, _opencv_decode, _pillow_problem,
                         _quiet_opencv)
+from .hidden import fill_hidden
 
 #: The smallest side, in pixels, an image must have to hold any edge.
 MIN_SIDE = 8
@@ -285,10 +286,9 @@ def to_gray(image, *, name: str = "image", max_pixels: int = 200_000_000,
     0-1 image's few values pushed a little over 1 or under 0, saturated:
     :data:`OVERSHOOT`); other floats are levels 0-255 as they are (a
     :class:`~seahough.errors.LevelsWarning` when they look like another
-    scale: under -0.5, over 1024, a float64 image at most 10). A path
-    is read by :func:`read_image` (with ``max_pixels``, ``max_memory_mb``
-    and ``orientation``).
-
+    scale: under -0.5, over 1024, a float64 image at most 10); a BGRA image's
+    transparent pixels are filled (:func:`~seahough.io.hidden.fill_hidden`). A path is
+    read by :func:`read_image` (with ``max_pixels``, ``max_memory_mb``, ``orientation``).
     An array that is already such an image (C-contiguous HxW float32, levels
     0-255, not read as 0-1) is not copied: the result is a read-only view of it
     (a 12 MP frame's copy is 46 MB). Copy it to write into it.
@@ -302,8 +302,8 @@ def to_gray(image, *, name: str = "image", max_pixels: int = 200_000_000,
     >>> bool(np.shares_memory(v, g)), v.flags.writeable
     (True, False)
     """
-    return _grey(_levels(image, name, max_pixels, min_side, max_memory_mb, orientation,
-                         bit_depth))
+    return _grey(fill_hidden(_levels(image, name, max_pixels, min_side, max_memory_mb,
+                                     orientation, bit_depth)))
 
 
 def to_image(image, colour: bool = False, *, name: str = "image",
@@ -315,7 +315,7 @@ def to_image(image, colour: bool = False, *, name: str = "image",
 
     The same checks, limits, messages and levels as :func:`to_gray` (which
     this is when ``colour`` is False). With ``colour``, a BGR or BGRA image
-    comes back as HxWx3 float32 BGR levels in [0, 255] (alpha dropped); a
+    comes back as HxWx3 float32 BGR levels in [0, 255] (transparent pixels filled); a
     grey one, or one whose three channels are equal everywhere (no colour to
     see), comes back as :func:`to_gray` makes it, so that its search is the
     grey search, bit for bit.
@@ -328,7 +328,8 @@ def to_image(image, colour: bool = False, *, name: str = "image",
     >>> to_image(np.full((10, 12, 3), 9, np.uint8), colour=True).shape   # no colour in it
     (10, 12)
     """
-    a = _levels(image, name, max_pixels, min_side, max_memory_mb, orientation, bit_depth)
+    a = fill_hidden(_levels(image, name, max_pixels, min_side, max_memory_mb, orientation,
+                            bit_depth))
     if not colour or a.ndim == 2:
         return _grey(a)
     a = a[:, :, :3]
