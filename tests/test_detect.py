@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import cv2
@@ -582,6 +583,18 @@ def test_transparent_pixels_of_a_searched_image_are_no_data(tmp_path):
     from seahough.io.images import to_gray
     opaque = cv2.cvtColor(photo, cv2.COLOR_BGR2BGRA)
     np.testing.assert_array_equal(to_gray(opaque), to_gray(photo))
+
+
+def test_a_detections_record_holds_its_outline_and_box():
+    """JSON consumers (a RoboSub team) got no box or outline: they worked
+    them out from the matrix. to_dict (and so --json) gives both."""
+    img = np.full((200, 260), 70, np.uint8)
+    cv2.rectangle(img, (60, 50), (179, 129), 190, -1)        # 120 x 80, centre (119.5, 89.5)
+    d = seahough.Detector(seahough.Pattern.rectangle(120, 80), (0.9, 1.1), (0, 10)).detect(img)[0]
+    rec = d.to_dict()
+    assert rec["box"] == pytest.approx([59.5, 49.5, 179.5, 129.5], abs=1.0)
+    assert len(rec["outline"]) == 1 and len(rec["outline"][0]) == 4
+    json.dumps(rec, allow_nan=False)
 
 
 def test_counting_many_objects_finds_them_and_says_when_the_list_was_cut(tmp_path):

@@ -113,6 +113,8 @@ def test_rows_once_and_as_detector_detect(scenes, first):
     for g, (i, rank, d) in zip(got, want):
         assert (g["index"], g["rank"], g["path"]) == (i, rank, paths[i])
         for k, v in d.to_dict().items():
+            if k in ("box", "outline"):      # (the survey's table: the matrix gives them)
+                continue
             if k == "matrix":
                 np.testing.assert_allclose(g["matrix"], np.ravel(v), rtol=0, atol=1e-9)
             elif isinstance(v, float):

@@ -127,11 +127,15 @@ class Detection(ValueEquality):
     pattern: str = ""
 
     def to_dict(self) -> dict:
-        """Plain-Python form for JSON.
+        """Plain-Python form for JSON; with an outline, ``box``: its bounding box
+        ``[x0, y0, x1, y1]`` in image pixels, and ``outline``: its polylines.
 
         >>> d = Detection(1.0, 2.0, 1.0, 0.0, 0.9, 0.8, np.eye(2, 3))
         >>> sorted(d.to_dict())[:4]
         ['angle', 'confidence', 'flags', 'kind']
+        >>> d.outline = [np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 2.0]])]
+        >>> d.to_dict()["box"]
+        [0.0, 0.0, 4.0, 2.0]
         """
         d = {"x": self.x, "y": self.y, "scale": self.scale, "angle": self.angle,
              "score": self.score, "confidence": self.confidence,
@@ -139,10 +143,12 @@ class Detection(ValueEquality):
              "kind": self.kind, "flags": list(self.flags),
              "nfa": self.nfa if math.isfinite(self.nfa) else None, "pattern": self.pattern}
         if self.kind == "line":
-            d["line_angle"] = self.line_angle
-            d["line_offset"] = self.line_offset
+            d.update(line_angle=self.line_angle, line_offset=self.line_offset)
+        if self.outline:
+            pts = np.vstack(self.outline)
+            d["box"] = [float(v) for v in (*pts.min(axis=0), *pts.max(axis=0))]
+            d["outline"] = [np.asarray(o, float).round(3).tolist() for o in self.outline]
         return d
-
 
 
 def confidence(score: float, runner_up: float) -> float:
