@@ -385,6 +385,10 @@ def test_a_folder_says_what_it_does_not_read(tmp_path, caplog):
     # read were left out without a word; a navigation log is no frame
     for name in ("f1.png", "f2.png"):
         cv2.imwrite(str(tmp_path / name), np.zeros((16, 16), np.uint8))
+    # (.jpe and .jfif are JPEG names OpenCV reads: they were read when named, skipped in a
+    # folder without a word, a user trial)
+    for name in ("f3.jpe", "f4.JFIF"):
+        (tmp_path / name).write_bytes(cv2.imencode(".jpg", np.zeros((16, 16), np.uint8))[1])
     for name in ("dive2", "dive3", "empty"):
         (tmp_path / name).mkdir()
     for name in ("dive2", "dive3"):
@@ -398,7 +402,8 @@ def test_a_folder_says_what_it_does_not_read(tmp_path, caplog):
     if hasattr(os, "mkfifo"):
         os.mkfifo(tmp_path / "live.ts")   # (a capture's named pipe: never opened, it would block)
     with caplog.at_level("WARNING", logger="seahough.io"):
-        assert [Path(p).name for p in list_frames(tmp_path)] == ["f1.png", "f2.png"]
+        assert [Path(p).name for p in list_frames(tmp_path)] == ["f1.png", "f2.png", "f3.jpe",
+                                                                 "f4.JFIF"]
     (msg,) = [r.getMessage() for r in caplog.records]
     assert msg.startswith(f"note: {tmp_path}: not read: 2 subfolders of images, e.g. dive2 "
                           "(a folder is not searched inside)"), msg

@@ -61,8 +61,8 @@ def printable(name) -> str:
     return _CONTROL.sub(lambda m: repr(m.group())[1:-1], str(name))
 
 
-IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".pgm", ".ppm", ".pnm",
-                    ".webp", ".jp2")
+IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".jpe", ".jfif", ".tif", ".tiff", ".bmp", ".pgm",
+                    ".ppm", ".pnm", ".webp", ".jp2")
 VIDEO_EXTENSIONS = (".mp4", ".avi", ".mov", ".mkv", ".m4v", ".mpg", ".mpeg", ".wmv", ".webm",
                     ".mts", ".ts", ".3gp")
 #: Pictures a folder may hold that are not read as frames (said so, not skipped silently).
