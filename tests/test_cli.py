@@ -318,6 +318,10 @@ def test_bit_depth_option_reads_twelve_bit_files(tmp_path):
     assert all("reach only" in r["warning"] and "--bit-depth" in r["warning"] for r in recs)
     rows = list(csv.DictReader(io.StringIO(run("detect", "circle:16", p, "--csv").stdout)))
     assert rows and all("reach only" in r["warning"] for r in rows)
+    eight = tmp_path / "b8.png"          # 8-bit data in a 16-bit file: no --bit-depth for it
+    cv2.imwrite(str(eight), cv2.imread(str(photo), cv2.IMREAD_GRAYSCALE).astype(np.uint16))
+    rec = json.loads(run("detect", "circle:16", eight, "--json").stdout)
+    assert "8-bit data in a 16-bit file" in rec["warning"] and "--bit-depth" not in rec["warning"]
     proc = run("detect", "circle:16", p, "--json", "--bit-depth", "12", "--out", tmp_path / "pics")
     assert proc.returncode == 0 and len(json.loads(proc.stdout)["detections"]) == 3
     assert "a 16-bit image" not in proc.stderr and "warning" not in json.loads(proc.stdout)
@@ -1100,7 +1104,7 @@ def test_not_found_shows_the_best_candidate_and_why(tmp_path):
     lines = proc.stdout.splitlines()
     assert [ln[:34] for ln in lines[1:]] == ["  best candidate, not reported: a:",
                                              "  best candidate, not reported: b:"], lines
-    assert lines[1].endswith("(option --min-score; for a alone: a=SPEC@min-score=...)"), lines[1]
+    assert lines[1].endswith("(option --min-score; for a alone: its @min-score=...)"), lines[1]
     rec = json.loads(run("detect", "a=rect:120,80@min-score=0.99+b=circle:30@min-score=0.99",
                          tmp_path / "r.png", "--json").stdout)
     assert rec["not_found"] == ["a", "b"] and set(rec["best_declined_by_pattern"]) == {"a", "b"}
@@ -1108,7 +1112,7 @@ def test_not_found_shows_the_best_candidate_and_why(tmp_path):
         "detect", "a=rect:120,80@min-score=0.99+b=circle:30@min-score=0.99", tmp_path / "r.png",
         "--csv").stdout)))
     assert [(r["found"], r["pattern"]) for r in rows] == [("false", "a"), ("false", "b")]
-    assert rows[0]["declined"].endswith("(option --min-score; for a alone: a=SPEC@min-score=...)")
+    assert rows[0]["declined"].endswith("(option --min-score; for a alone: its @min-score=...)")
     # a scale outside the searched range names the option that sets it
     from types import SimpleNamespace as C
     from seahough.cli._records import _option_hint

@@ -132,7 +132,7 @@ def _option_hint(c) -> str:
     >>> _option_hint(C(score=0.2, declined="score 0.2 (coarse) under 0.425 (0.85 x min_score)"))
     ' (far under it: the pattern may not be in view)'
     >>> _option_hint(C(score=0.6, declined="NFA 3 over max_nfa 1", pattern="buoy"))
-    ' (option --max-nfa; for buoy alone: buoy=SPEC@max-nfa=...)'
+    ' (option --max-nfa; for buoy alone: its @max-nfa=...)'
     """
     option = next((o for words, o in _OPTION_OF if words in c.declined), None)
     bound = re.search(r"under (\d+(?:\.\d+)?(?:e[-+]?\d+)?)", c.declined)
@@ -140,7 +140,7 @@ def _option_hint(c) -> str:
         return " (far under it: the pattern may not be in view)"
     name = getattr(c, "pattern", "")
     if option in _OWN_OPTION and name:    # (one of several: the option sets them all)
-        return f" (option {option}; for {name} alone: {name}=SPEC@{_OWN_OPTION[option]}=...)"
+        return f" (option {option}; for {name} alone: its @{_OWN_OPTION[option]}=...)"
     return f" (option {option})" if option else ""
 
 

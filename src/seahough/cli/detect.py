@@ -108,15 +108,15 @@ def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir,
     try:
         img = image if image is not None else read_image(
             name, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
-        bits = ""
+        bits, top = "", int(img.max(initial=0)) if img.dtype.name == "uint16" else 0
         if img.dtype.name == "uint16" and cfg.bit_depth is None:   # (said with its file's name)
-            top = int(img.max(initial=0))
             say_bits(top, name)
-            # (and in its own record: the warning is said once a run, on stderr; a table
-            # read in a spreadsheet showed a 12-bit camera's photos as "not found")
+            # (and in its record, say_bits' words short: the warning comes once a run, on
+            # stderr; a spreadsheet of the table showed a 12-bit camera's photos "not found")
             if 0 < top < 4096:
-                bits = (f"16-bit values reach only {top}: a camera's "
-                        f"{max(top.bit_length(), 10)}-bit samples? (--bit-depth)")
+                bits = (f"16-bit values reach only {top}: " + (
+                    "8-bit data in a 16-bit file? (convert it to 8-bit)" if top < 256 else
+                    f"a camera's {max(top.bit_length(), 10)}-bit samples? (--bit-depth)"))
         res = detector.search(img)
         res.warning = bits
     except SeahoughError as e:

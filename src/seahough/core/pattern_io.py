@@ -30,8 +30,11 @@ def grey_and_colour(image, name: str = "pattern", bit_depth: int | None = None):
     if isinstance(image, (str, os.PathLike)):
         name = path = str(image)
         image = read_image(image)
-    colour = to_image(image, True, name=name, bit_depth=bit_depth)
-    grey = to_gray(image, name=name, bit_depth=bit_depth)      # (both check the image first)
+    # (its alpha is its mask, read below; its transparent pixels are not filled, as a
+    # searched image's are: the step to them is its outline, a reviewer's find)
+    rgb = image[..., :3] if isinstance(image, np.ndarray) and image.shape[2:] == (4,) else image
+    colour = to_image(rgb, True, name=name, bit_depth=bit_depth)
+    grey = to_gray(rgb, name=name, bit_depth=bit_depth)      # (both check the image first)
     alpha = None
     if isinstance(image, np.ndarray) and image.ndim == 3 and image.shape[2] == 4:
         a = np.nan_to_num(image[..., 3].astype(np.float64))

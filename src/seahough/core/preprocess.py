@@ -98,14 +98,17 @@ def factor_hint(shape, factor: float, config: Config, min_scale: float) -> str:
     in a 6000 px photo, "too few edges at scale 0.05", and the pattern was
     fine.
 
-    >>> factor_hint((4500, 6000), 0.05, Config(), 6.0).split(":")[0]
+    >>> factor_hint((4500, 6000), 320 / 6000, Config(), 6.0).split(":")[0]
     '; the 6000x4500 image is searched at scale 0.05 (its longer side brought to 320 px'
     """
     if factor >= 0.999 or config.downscale is not None:
         return ""
     h, w = shape[:2]
-    return (f"; the {w}x{h} image is searched at scale {factor:.2f} (its longer side brought to "
-            f"{config.target_size} px: Config.target_size), and the pattern with it: give the "
+    why = (f"its longer side brought to {config.target_size} px: Config.target_size"
+           if abs(factor * max(h, w) - config.target_size) < 1.0 else
+           "the scale that keeps the pattern large enough at the smallest searched scale")
+    return (f"; the {w}x{h} image is searched at scale {factor:.2f} ({why}), and the pattern "
+            "with it: give the "
             f"pattern at about its size in the image (the scale range starts at {min_scale:g}), "
             "or set a larger working scale (Config.downscale, CLI --downscale)")
 

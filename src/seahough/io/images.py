@@ -36,7 +36,7 @@ from ..errors import (BitDepthWarning, ImageReadError, ImageSizeError, ImageValu
                       LevelsWarning, ParameterError, WriteError, warn_at_caller)
 from ._decoders import (_Header, _decode_jpeg, _decode_png, _opencv_decode, _pillow_problem,
                         _quiet_opencv)
-from .hidden import fill_hidden
+from .hidden import fill_hidden, hidden_pixels
 
 #: The smallest side, in pixels, an image must have to hold any edge.
 MIN_SIDE = 8
@@ -302,8 +302,8 @@ def to_gray(image, *, name: str = "image", max_pixels: int = 200_000_000,
     >>> bool(np.shares_memory(v, g)), v.flags.writeable
     (True, False)
     """
-    return _grey(fill_hidden(_levels(image, name, max_pixels, min_side, max_memory_mb,
-                                     orientation, bit_depth)))
+    a = _levels(image, name, max_pixels, min_side, max_memory_mb, orientation, bit_depth)
+    return fill_hidden(_grey(a), hidden_pixels(a[:, :, 3] if a.shape[2:] == (4,) else None))
 
 
 def to_image(image, colour: bool = False, *, name: str = "image",
@@ -328,14 +328,14 @@ def to_image(image, colour: bool = False, *, name: str = "image",
     >>> to_image(np.full((10, 12, 3), 9, np.uint8), colour=True).shape   # no colour in it
     (10, 12)
     """
-    a = fill_hidden(_levels(image, name, max_pixels, min_side, max_memory_mb, orientation,
-                            bit_depth))
+    a = _levels(image, name, max_pixels, min_side, max_memory_mb, orientation, bit_depth)
+    hidden = hidden_pixels(a[:, :, 3] if a.shape[2:] == (4,) else None)
     if not colour or a.ndim == 2:
-        return _grey(a)
+        return fill_hidden(_grey(a), hidden)
     a = a[:, :, :3]
     if np.array_equal(a[:, :, 0], a[:, :, 1]) and np.array_equal(a[:, :, 0], a[:, :, 2]):
-        return _grey(a)
-    return np.ascontiguousarray(a, dtype=np.float32)
+        return fill_hidden(_grey(a), hidden)
+    return fill_hidden(np.ascontiguousarray(a, dtype=np.float32), hidden)   # (BGRA: a copy)
 
 
 def _levels(image, label, max_pixels, min_side, max_memory_mb, orientation,
