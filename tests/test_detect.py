@@ -608,6 +608,25 @@ def test_a_detections_record_holds_its_outline_and_box():
     json.dumps(rec, allow_nan=False)
 
 
+def test_a_candidate_chance_explains_is_no_more_objects_hint():
+    """An archaeologist's trial: an amphora (an ellipse, 60 x 100) in a wreck
+    frame with max_results=1 said "2 more candidates over --min-score left
+    out by --max-results: more objects may be there"; with 2, both were
+    declined by their NFA (67 and 6680). A candidate left out by
+    max_results is now judged first: only those chance does not explain are
+    counted."""
+    t = np.linspace(0, 2 * math.pi, 20, endpoint=False)
+    ellipse = list(zip(30 + 30 * np.sin(t), 50 + 50 * np.cos(t)))
+    det = seahough.Detector(seahough.Pattern.polygon(ellipse, polarity="dark"), (0.6, 1.6),
+                            max_results=1, min_score=0.35)
+    res = det.search(str(data_path("sequences", "aqualoc_amphorae_wreck", "frame_060.png")))
+    assert len(res.detections) == 1
+    for c in res.candidates:
+        if c.declined.startswith("max_results"):
+            assert c.evidence.nfa <= 1.0, c.evidence.nfa
+    assert all(c.evidence.nfa > 1 for c in res.candidates if c.declined.startswith("NFA"))
+
+
 def test_counting_many_objects_finds_them_and_says_when_the_list_was_cut(tmp_path):
     """A scientist's trial: 40 rings drawn on a real seabed photo, searched with
     max_results 50: 1,200 key points left the fainter ones without any (about

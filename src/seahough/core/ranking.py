@@ -468,12 +468,12 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
             if _copy_of(ctx, c, twin):
                 other_object.append(c)
             continue
-        if len(accepted) >= ctx.max_results:
-            c.declined = f"max_results {ctx.max_results} reached by better candidates"
-            continue
-        judge(ctx, c)  # (only those that could be accepted: it costs a little)
+        judge(ctx, c)  # (those that could be accepted, or left out by max_results: a little)
         if c.evidence.nfa > ctx.max_nfa:
             c.declined = f"NFA {c.evidence.nfa:.3g} over max_nfa {ctx.max_nfa:.3g}"
+            continue
+        if len(accepted) >= ctx.max_results:   # (chance explains none: more may be there)
+            c.declined = f"max_results {ctx.max_results} reached by better candidates"
             continue
         if _unseen_hole(ctx, c):
             c.declined = (f"its hole is not in the image (hole support under "
