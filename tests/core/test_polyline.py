@@ -258,3 +258,18 @@ def test_an_open_shape_is_found_at_its_own_size(points, width, scale, degrees, s
     found = pat.polyline_points @ np.asarray(d.matrix)[:, :2].T + np.asarray(d.matrix)[:, 2]
     assert np.hypot(*(found - truth).T).max() < 3.0, (d.scale, d.score)
     assert d.score > 0.95
+
+
+def test_an_opencv_contour_is_a_polygon_and_a_wrong_shape_is_named():
+    """An archaeologist's trial: seahough.Pattern.polygon(contour) with OpenCV's own
+    (n, 1, 2) contour was refused as "expected (x, y) pairs", the whole
+    array printed; a (2, n) array got the same words."""
+    img = np.zeros((120, 160), np.uint8)
+    cv2.ellipse(img, (80, 60), (50, 30), 0, 0, 360, 255, -1)
+    (contour,), _ = cv2.findContours(img, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    assert contour.ndim == 3 and contour.shape[1:] == (1, 2)
+    p = seahough.Pattern.polygon(contour)
+    assert p.kind == "polygon" and seahough.Pattern.polyline(contour[:10], 4).kind == "polyline"
+    with pytest.raises(ParameterError, match=r"^polygon points \(an array of shape \(2, 20\)\): "
+                       r"expected \(x, y\) pairs, an \(n, 2\) array"):
+        seahough.Pattern.polygon(np.zeros((2, 20)))

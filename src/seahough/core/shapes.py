@@ -34,15 +34,39 @@ _MAX_FINE = 8192
 MAX_TURN = 170.0
 
 
-def _points(points) -> np.ndarray:
-    """The polyline's points as an (n, 2) float array, consecutive repeats
-    dropped (a ParameterError naming ``points`` when there is no polyline)."""
+def xy_pairs(points, what: str = "points={!r}") -> np.ndarray:
+    """``points`` as an (n, 2) float array: (x, y) pairs, or an OpenCV
+    contour's (n, 1, 2); else a ParameterError saying the shape it got (an
+    archaeologist's contour was refused as "expected (x, y) pairs" with the
+    whole array printed).
+
+    >>> xy_pairs(np.zeros((5, 1, 2), np.int32)).shape
+    (5, 2)
+    >>> xy_pairs(np.zeros((2, 20)))
+    Traceback (most recent call last):
+    seahough.errors.ParameterError: points (an array of shape (2, 20)): expected (x, y) pairs, an (n, 2) array (or an OpenCV contour, (n, 1, 2))
+    """
+    bare = what.split("{")[0].rstrip("= ")       # (what without the value)
+    if isinstance(points, np.ndarray):
+        name = f"{bare} (an array of shape {points.shape})"
+    else:
+        name = what.format(points) if len(repr(points)) <= 80 else bare
     try:
         pts = np.asarray(points, float)
     except (TypeError, ValueError):
-        pts = None
-    if pts is None or pts.ndim != 2 or pts.shape[1] != 2:   # ((x, y, z) rows were re-paired)
-        raise ParameterError(f"points={points!r}: expected (x, y) pairs") from None
+        raise ParameterError(f"{name}: expected (x, y) pairs of numbers") from None
+    if pts.ndim == 3 and pts.shape[1:] == (1, 2):
+        pts = pts.reshape(-1, 2)
+    if pts.ndim != 2 or pts.shape[1] != 2:   # ((x, y, z) rows were re-paired)
+        raise ParameterError(f"{name}: expected (x, y) pairs, an (n, 2) array (or an OpenCV "
+                             "contour, (n, 1, 2))")
+    return pts
+
+
+def _points(points) -> np.ndarray:
+    """The polyline's points as an (n, 2) float array, consecutive repeats
+    dropped (a ParameterError naming ``points`` when there is no polyline)."""
+    pts = xy_pairs(points)
     if not np.isfinite(pts).all():
         raise ParameterError("points: the polyline's coordinates must be finite")
     if pts.shape[0] >= 2:   # (points under half a pixel apart are one: jitter turns back)
@@ -68,12 +92,7 @@ def vertices(points, min_size: float) -> np.ndarray:
     """A polygon's vertices as an (n, 2) array moved to (0, 0), checked: at
     least 3 finite (x, y) pairs ((x, y, z) rows were re-paired into another
     polygon), some area, ``min_size`` px across at its narrowest."""
-    try:
-        pts = np.asarray(points, float)
-    except (TypeError, ValueError):
-        pts = np.zeros((0, 3))
-    if pts.ndim != 2 or pts.shape[1] != 2:
-        raise ParameterError(f"polygon points {points!r}: expected (x, y) pairs")
+    pts = xy_pairs(points, "polygon points {!r}")
     if pts.shape[0] < 3 or not np.isfinite(pts).all():
         raise ParameterError("polygon needs at least 3 finite (x, y) vertices")
     pts = pts - pts.min(axis=0)
