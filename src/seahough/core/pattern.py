@@ -177,8 +177,8 @@ class Pattern:
         if mask is not None:
             mask = to_gray(mask, name="pattern mask") > 0
             if mask.shape != gray.shape:
-                raise ParameterError(f"pattern mask shape {mask.shape} differs from the "
-                                     f"pattern image shape {gray.shape}")
+                raise ParameterError(f"the pattern mask is {mask.shape[1]}x{mask.shape[0]} px, the "
+                                     f"pattern image {w}x{h} (width x height)")
             if not mask.any():
                 raise PatternError("pattern mask is empty: no pixel belongs to the object")
         self.mask = mask
