@@ -1300,3 +1300,14 @@ def test_an_overlay_says_what_was_not_found_and_keeps_each_patterns_colour(tmp_p
     from types import SimpleNamespace as Det
     assert colours([Det(pattern="post")], ["buoy", "post"]) == colours(
         [Det(pattern="buoy"), Det(pattern="post")])[1:]
+
+
+def test_an_ellipse_spec_finds_an_ellipse(tmp_path):
+    img = np.full((240, 320), 70, np.uint8)
+    cv2.ellipse(img, (150, 110), (45, 27), 0, 0, 360, 200, -1)
+    cv2.imwrite(str(tmp_path / "e.png"), img)
+    proc = run("detect", "ellipse:45,27", tmp_path / "e.png", "--json", "--scale-range", 0.9, 1.1,
+               "--angle-range", 0, 180)
+    assert proc.returncode == 0, proc.stderr
+    d = json.loads(proc.stdout)["detections"][0]
+    assert abs(d["x"] - 150) < 1.0 and abs(d["y"] - 110) < 1.0 and len(d["outline"][0]) > 30

@@ -302,6 +302,8 @@ BAD_ARGS = [
     ("circle:0", ["circle:0", "scene.png"], ["circle:0", "radius"]),
     ("ring:10,20", ["ring:10,20", "scene.png"], ["ring:10,20", "inner_radius"]),
     ("line:10,8", ["line:10,8", "scene.png"], ["line:10,8", "twice its width"]),
+    ("ellipse:30", ["ellipse:30", "scene.png"], ["ellipse:30", "expected ellipse:RX,RY"]),
+    ("ellipse:30,-2", ["ellipse:30,-2", "scene.png"], ["ellipse:30,-2", "ry"]),
     ("polygon:0,0,1,1", ["polygon:0,0,1,1", "scene.png"], ["polygon:0,0,1,1"]),
     ("collinear polygon", ["polygon:0,0,10,10,20,20", "scene.png"], ["no area"]),
     ("tiny rect (no edges)", ["rect:2,2", "scene.png"], ["rect:2,2", "too few edges"]),

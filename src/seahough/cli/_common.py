@@ -18,7 +18,8 @@ from ..errors import ParameterError, SeahoughError, interrupted, without_name
 
 PROG = "seahough"
 SHAPES_HELP = ("rect:W,H | line:LENGTH,WIDTH | circle:R | circle:R,INNER (a ring) | "
-               "polygon:x1,y1,x2,y2,... | polyline:WIDTH:x1,y1,x2,y2,... | curve:WIDTH")
+               "ellipse:RX,RY | polygon:x1,y1,x2,y2,... | polyline:WIDTH:x1,y1,x2,y2,... | "
+               "curve:WIDTH")
 _SHAPE_POLARITY = {"same": "bright", "inverted": "dark", "bright": "bright", "dark": "dark",
                    "either": "either"}
 _IMAGE_POLARITY = {"same": "same", "inverted": "inverted", "bright": "same", "dark": "inverted",
@@ -224,11 +225,12 @@ def _numbers(text: str, spec: str) -> list[float]:
 
 
 _SHAPE_COUNTS = {"rect": 2, "rectangle": 2, "line": 2, "circle": (1, 2), "ring": 2,
-                 "polygon": None, "poly": None, "polyline": None}
+                 "ellipse": 2, "polygon": None, "poly": None, "polyline": None}
 _SHAPE_USAGE = {"rect": "rect:W,H (e.g. rect:60,40)", "rectangle": "rect:W,H (e.g. rect:60,40)",
                 "line": "line:LENGTH,WIDTH (e.g. line:200,8)",
                 "circle": "circle:R or circle:R,INNER (e.g. circle:30)",
                 "ring": "ring:R,INNER (e.g. ring:30,20)",
+                "ellipse": "ellipse:RX,RY (semi-axes, e.g. ellipse:30,50)",
                 "polygon": "polygon:x1,y1,x2,y2,x3,y3,...",
                 "poly": "polygon:x1,y1,x2,y2,x3,y3,...",
                 "polyline": "polyline:WIDTH:x1,y1,x2,y2,... (e.g. polyline:6:0,100,0,0,210,0,210,100)",
@@ -557,6 +559,8 @@ def parse_pattern(spec: str, polarity: str | None = None, mask: str | None = Non
                 return Pattern.line(v[0], v[1], polarity=pol)
             if kind in ("circle", "ring"):
                 return Pattern.circle(v[0], v[1] if len(v) > 1 else None, polarity=pol)
+            if kind == "ellipse":
+                return Pattern.ellipse(v[0], v[1], polarity=pol)
             if kind == "polyline":
                 return Pattern.polyline([v[i:i + 2] for i in range(1, len(v), 2)], v[0],
                                         polarity=pol)

@@ -29,7 +29,8 @@ from . import shapes as _shapes
 
 POLARITIES = ("bright", "dark", "either")
 #: What a pattern can be (``Pattern.kind``).
-KINDS = ("image", "frame", "rectangle", "line", "polygon", "circle", "ring", "polyline")
+KINDS = ("image", "frame", "rectangle", "line", "polygon", "circle", "ring", "ellipse",
+         "polyline")
 #: Share of an image pattern's edge points on long chains above which it is a
 #: shape with borders rather than texture (:meth:`Pattern.has_long_borders`).
 LONG_BORDERS = 0.9
@@ -103,7 +104,8 @@ class Pattern:
 
     Build it with one of the constructors: :meth:`from_image`,
     :meth:`from_frame`, :meth:`rectangle`, :meth:`line`, :meth:`polygon`,
-    :meth:`circle`, :meth:`polyline`. Then hand it to :class:`~seahough.Detector`.
+    :meth:`circle`, :meth:`ellipse`, :meth:`polyline`. Then hand it to
+    :class:`~seahough.Detector`.
 
     Attributes
     ----------
@@ -130,7 +132,7 @@ class Pattern:
         Polylines (pattern-image pixels) drawn to show a detection.
     kind : str
         ``"image"``, ``"frame"``, ``"rectangle"``, ``"line"``, ``"polygon"``,
-        ``"circle"``, ``"ring"`` or ``"polyline"``.
+        ``"circle"``, ``"ring"``, ``"ellipse"`` or ``"polyline"``.
 
     Examples
     --------
@@ -311,6 +313,7 @@ class Pattern:
         return cls._shape([pts], w, h, margin, polarity, "polygon")
 
     circle = classmethod(_shapes.circle)
+    ellipse = classmethod(_shapes.ellipse)
     line = classmethod(_shapes.line)
     polyline = classmethod(_shapes.polyline)
 

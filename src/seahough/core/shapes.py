@@ -326,6 +326,28 @@ def circle(cls, radius, inner_radius=None, *, polarity="bright", margin=6.0):
         holes = (np.stack([r + ri * np.cos(t), r + ri * np.sin(t)], 1),)
     return cls._shape([outer], 2 * r, 2 * r, margin, polarity, kind, holes=holes)
 
+def ellipse(cls, rx, ry, *, polarity="bright", margin=6.0):
+    """A filled ellipse of semi-axes ``rx`` (along x) and ``ry`` (along y),
+    px: an amphora or a pipe's end seen from above, a disc seen at a slant
+    (a circle when they are equal: :meth:`circle`, searched at one rotation).
+    It looks the same turned by 180 degrees: an angle range of 180 degrees
+    covers it.
+
+    >>> from seahough import Pattern
+    >>> p = Pattern.ellipse(30, 50)
+    >>> p.kind, p.image.shape, Pattern.ellipse(20, 20).kind
+    ('ellipse', (113, 73), 'circle')
+    """
+    from .pattern import _check_positive
+    _check_positive(rx=rx, ry=ry)
+    a, b = float(rx), float(ry)
+    if a == b:
+        return circle(cls, a, polarity=polarity, margin=margin)
+    t = np.linspace(0, 2 * np.pi, max(32, int(np.pi * (a + b))), endpoint=False)
+    outer = np.stack([a + a * np.cos(t), b + b * np.sin(t)], 1)
+    return cls._shape([outer], 2 * a, 2 * b, margin, polarity, "ellipse")
+
+
 def line(cls, length, width, *, polarity="bright", margin=6.0):
     """A straight band ``width`` pixels wide: a rope, tether, cable or pipe.
 

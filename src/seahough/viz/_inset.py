@@ -12,7 +12,7 @@ from matplotlib.path import Path as MplPath
 from ._figure import COLOURS, _TEXT_OUTLINE, _imshow, _pattern_picture
 
 #: Pattern kinds drawn from their outline (a shape), not from their image.
-_SHAPE_KINDS = ("rectangle", "line", "polygon", "circle", "ring", "polyline")
+_SHAPE_KINDS = ("rectangle", "line", "polygon", "circle", "ring", "ellipse", "polyline")
 #: Behind a shape: the grey of a shape pattern's background (30).
 _SHAPE_BACK = "#1e1e1e"
 
