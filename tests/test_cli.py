@@ -567,6 +567,9 @@ def test_several_patterns_say_which_found_nothing(tmp_path):
                                                  tmp_path / "r.png", "--csv").stdout)))
     assert [(r["found"], r["pattern"]) for r in rows] == [("true", "box"), ("false", "disc")]
     assert rows[1]["declined"] and rows[1]["x"] == "" and rows[1]["rank"] == ""
+    # a detection's row has its outline's bounding box, as JSON has (an archaeologist's wish)
+    assert json.loads(rows[0]["box"]) == pytest.approx(rec["detections"][0]["box"])
+    assert rows[1]["box"] == "" and list(rows[0])[-1] == "box"
 
 
 def test_angles_near_360_are_printed_wrapped():

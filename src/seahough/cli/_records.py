@@ -161,17 +161,24 @@ def _best_declined_line(c) -> str:
 CSV_COLUMNS = ("file", "width", "height", "found", "note", "time_ms", "rank", "pattern", "kind",
                "x", "y", "scale", "angle", "score", "confidence", "nfa", "flags", "line_angle",
                "line_offset", "width_px", "length", "votes", "matrix", "points", "declined",
-               "frame", "error", "warning")
+               "frame", "error", "warning", "box")
 
 
 def error_row(name: str, problem: str) -> str:
     """The CSV line of an image that could not be read or searched.
 
-    >>> error_row("a.png", "truncated PNG").split(",")[-4:]
-    ['', '', 'truncated PNG', '']
+    >>> error_row("a.png", "truncated PNG").split(",")[-5:]
+    ['', '', 'truncated PNG', '', '']
     """
-    row = [name] + [""] * (len(CSV_COLUMNS) - 4) + [_frame(name), problem, ""]
-    return _csv_line(row)
+    return _csv_row(file=name, frame=_frame(name), error=problem)
+
+
+def _csv_row(**values) -> str:
+    """A CSV line of :data:`CSV_COLUMNS` from its values by column ("" for
+    the others; lists and dicts as JSON text)."""
+    cell = lambda v: "" if v is None else (json.dumps(v, separators=(",", ":"))
+                                           if isinstance(v, (list, tuple, dict)) else v)
+    return _csv_line([cell(values.get(col)) for col in CSV_COLUMNS])
 
 
 def _frame(name: str):
@@ -194,22 +201,16 @@ def _csv_rows(name, w, h, note, ms, dets, nears=(), warning=""):
     that would let it through) in ``declined``; ``nears``: ``(pattern name,
     that candidate or None)`` pairs. An image without detections has one
     such row at least. ``warning``: about the image's values (every row)."""
-    head = [name, int(w), int(h), "true" if dets else "false", note, round(ms, 3)]
+    head = dict(file=name, width=int(w), height=int(h), note=note, time_ms=round(ms, 3),
+                frame=_frame(name), warning=warning)
     out = []
     for rank, d in enumerate(dets, 1):
-        rec = d.to_dict()
+        rec = {k: v for k, v in d.to_dict().items() if k not in ("outline", "declined")}
         rec["width_px"] = rec.pop("width", None)   # (a curve's width, not the image's)
-        row = head + [rank]
-        for col in CSV_COLUMNS[7:-4]:
-            v = rec.get(col)
-            row.append("" if v is None else json.dumps(v, separators=(",", ":"))
-                       if isinstance(v, (list, tuple, dict)) else v)
-        out.append(_csv_line(row + ["", _frame(name), "", warning]))
-    blank = [""] * (len(CSV_COLUMNS) - len(head) - 6)
+        out.append(_csv_row(**{**rec, **head}, found="true", rank=rank))
     for who, near in nears if dets else (list(nears) or [("", None)]):
         why = near.declined + _option_hint(near) if near is not None else ""
-        out.append(_csv_line(head[:3] + ["false"] + head[4:] + ["", who] + blank
-                             + [why, _frame(name), "", warning]))
+        out.append(_csv_row(**head, found="false", pattern=who, declined=why))
     return out
 
 

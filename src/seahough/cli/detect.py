@@ -365,7 +365,7 @@ def _run_jobs(jobs, detector: Detector, pat, out_dir, workers: int, draw=None, b
               "none: one row, found false, and in its column declined why the best "
               "candidate was not reported, and the option that would let it through; several "
               "patterns: such a row for each that found nothing, naming it in pattern); "
-              "lists (flags, matrix, points) as JSON text; a "
+              "lists (flags, matrix, points, box) as JSON text; a "
               "video's frames: its number in frame (JSON too).")
 @click.option("--out", "-o", type=click.Path(file_okay=False), default=None,
               help="Write pictures per image here: <stem>_overlay.png (detections), "
