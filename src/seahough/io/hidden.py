@@ -26,8 +26,8 @@ BLEND_RING = 2
 def hidden_pixels(alpha: np.ndarray | None) -> np.ndarray | None:
     """The pixels to fill of an image of alpha channel ``alpha`` (None:
     none): the transparent ones (alpha 0), and those less than fully opaque
-    within :data:`BLEND_RING` px of them; None when there are none. (Every
-    pixel transparent, an orthomosaic's empty tile: all of them, no data.)
+    within :data:`BLEND_RING` px of them; None when there are none, or when
+    every pixel is transparent (nothing to fill from).
 
     >>> a = np.full((5, 8), 255, np.uint8); a[:, :2] = 0; a[:, 2] = 120; a[0, 6] = 200
     >>> hidden_pixels(a)[0].astype(int).tolist()       # (the 200 far from them: kept)
@@ -39,7 +39,7 @@ def hidden_pixels(alpha: np.ndarray | None) -> np.ndarray | None:
         return None
     zero = alpha == 0
     if zero.all():
-        return zero
+        return None
     k = 2 * BLEND_RING + 1
     near = cv2.dilate(zero.astype(np.uint8), np.ones((k, k), np.uint8)) > 0
     return zero | (near & (alpha < alpha.max()))
@@ -62,15 +62,10 @@ def fill_hidden(levels: np.ndarray, hidden: np.ndarray | None) -> np.ndarray:
     True
     >>> fill_hidden(img, None) is img
     True
-    >>> float(fill_hidden(img.copy(), np.ones((60, 80), bool)).max())    # nothing seen: flat
-    0.0
     """
     if hidden is None:
         return levels
     out = levels if levels.flags.writeable else levels.copy()
-    if hidden.all():          # (no data at all: flat, a search says "no edges")
-        out[...] = 0.0
-        return out
     seen = (~hidden).astype(np.float32)
     if out.ndim == 3:
         seen = seen[:, :, None]
