@@ -181,6 +181,24 @@ def _csv_row(**values) -> str:
     return _csv_line([cell(values.get(col)) for col in CSV_COLUMNS])
 
 
+def bits_warning(top: int) -> str:
+    """A record's words for a 16-bit image whose values reach only ``top``
+    (:func:`seahough.io.images.say_bits` says it once a run, at length, on
+    stderr; a spreadsheet of the table showed a 12-bit camera's photos as
+    "not found"); "" for 16-bit data.
+
+    >>> bits_warning(220)
+    '16-bit values reach only 220: 8-bit data in a 16-bit file? (convert it to 8-bit)'
+    >>> bits_warning(4095).endswith("12-bit samples? (--bit-depth)"), bits_warning(60000)
+    (True, '')
+    """
+    if not 0 < top < 4096:
+        return ""
+    return f"16-bit values reach only {top}: " + (
+        "8-bit data in a 16-bit file? (convert it to 8-bit)" if top < 256 else
+        f"a camera's {max(top.bit_length(), 10)}-bit samples? (--bit-depth)")
+
+
 def _frame(name: str):
     """A video frame's number (``"dive.mp4#12"``: 12), else ""."""
     ref = split_video_ref(name)

@@ -25,7 +25,7 @@ from ._common import (CurveSearch, _Output, _dumps, _max_nfa_callback, _out_dir,
                       ignore_boxes, make_detector, workers_option)
 from ._records import (CSV_COLUMNS, _best_declined_dict, _best_declined_line, _captions,
                        _csv_line, _csv_rows, _detection_lines, _frame, _ignored, error_row,
-                       patterns_not_found, picture_title)
+                       bits_warning, patterns_not_found, picture_title)
 
 # the command's defaults are the library's, so that both give the same results
 _DET = {k: v.default for k, v in inspect.signature(Detector.__init__).parameters.items()}
@@ -108,15 +108,11 @@ def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir,
     try:
         img = image if image is not None else read_image(
             name, max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb)
-        bits, top = "", int(img.max(initial=0)) if img.dtype.name == "uint16" else 0
+        bits = ""
         if img.dtype.name == "uint16" and cfg.bit_depth is None:   # (said with its file's name)
+            top = int(img.max(initial=0))
             say_bits(top, name)
-            # (and in its record, say_bits' words short: the warning comes once a run, on
-            # stderr; a spreadsheet of the table showed a 12-bit camera's photos "not found")
-            if 0 < top < 4096:
-                bits = (f"16-bit values reach only {top}: " + (
-                    "8-bit data in a 16-bit file? (convert it to 8-bit)" if top < 256 else
-                    f"a camera's {max(top.bit_length(), 10)}-bit samples? (--bit-depth)"))
+            bits = bits_warning(top)       # (and in its record)
         res = detector.search(img)
         res.warning = bits
     except SeahoughError as e:

@@ -85,13 +85,12 @@ def blank_border(gray: np.ndarray) -> tuple[int, int, int, int]:
         flat = grey(lines).std(axis=1) < BLANK_STD
         return -1 if flat.all() else int(np.argmin(flat))
 
-    def depth(lines: np.ndarray, lo: int = 0, hi: int | None = None) -> int:
-        # (lo:hi: the part of the side between the bars of the sides across it, where
-        # the picture begins: a picture framed on all four sides, a user trial's)
-        n = flat_run(lines)
+    def depth(lines: np.ndarray, n: int, lo: int, hi: int) -> int:
+        # n: its flat_run; lo:hi: the part of the side between the bars of the sides
+        # across it, where the picture begins (a picture framed on all four sides)
         if n <= 0:                    # (-1: a quarter of the side flat: a background)
             return 0
-        framed = lo > 0 or (hi is not None and hi < lines.shape[1])
+        framed = lo > 0 or hi < lines.shape[1]
         lines = grey(lines[:, lo:hi])
         if framed and lines[n].std() < BLANK_STD:   # (a flat object on a flat ground)
             return 0
@@ -108,9 +107,10 @@ def blank_border(gray: np.ndarray) -> tuple[int, int, int, int]:
     ly, lx = int(h * BLANK_DEPTH), int(w * BLANK_DEPTH)
     sides = (g[:ly], g[h - ly:][::-1], np.swapaxes(g[:, :lx], 0, 1),
              np.swapaxes(g[:, w - lx:][:, ::-1], 0, 1))          # top, bottom, left, right
-    t, b, l, r = (max(flat_run(s), 0) for s in sides)
-    top, bottom = depth(sides[0], l, w - r), depth(sides[1], l, w - r)
-    left, right = depth(sides[2], t, h - b), depth(sides[3], t, h - b)
+    runs = [flat_run(s) for s in sides]
+    t, b, l, r = (max(n, 0) for n in runs)
+    top, bottom, left, right = (depth(s, n, lo, hi) for s, n, (lo, hi) in zip(
+        sides, runs, ((l, w - r), (l, w - r), (t, h - b), (t, h - b))))
     if not (top or bottom or left or right):
         return (0, 0, w, h)
     box = (left, top, w - right, h - bottom)
