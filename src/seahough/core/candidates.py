@@ -515,7 +515,7 @@ def find_candidates(ctx: SearchContext, votes: Votes) -> list:
             continue
         out.append(Candidate(fit, v, fit.score))
     out.sort(key=lambda c: -c.work_score)
-    return out[: ctx.n_candidates]
+    return out if ctx.counting else out[: ctx.n_candidates]
 
 
 def best_declined(res):

@@ -426,7 +426,12 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
     # clean one elsewhere in the image
     share = 0.0 if ctx.counting else 0.6
     pre = max(0.85 * ctx.min_score, share * best)
-    todo = [c for c in cands if c.work_score >= pre][: ctx.max_results + 2]
+    todo = [c for c in cands if c.work_score >= pre]
+    if ctx.counting:   # (those chance explains, judged at the working scale, go last:
+        for c in todo:  # a sonar tile's speckle took every place from the rubble)
+            judge(ctx, c)
+        todo.sort(key=lambda c: c.evidence.nfa > ctx.max_nfa)
+    todo = todo[: ctx.max_results + 2]
     for c in cands:
         c.placed = _full_pose(c.fit.pose, ctx.features)
         if c.work_score < pre:   # (which bound: a user could not tell what to change)
