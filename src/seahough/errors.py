@@ -117,9 +117,14 @@ def warn_at_caller(message: str, category) -> None:
         warnings.warn_explicit(message, category, "seahough", 0, module="seahough")
         return
     g = f.f_globals
-    warnings.warn_explicit(message, category, f.f_code.co_filename, f.f_lineno,
-                           module=g.get("__name__", "seahough"),
-                           registry=g.setdefault("__warningregistry__", {}), module_globals=g)
+    name = f.f_code.co_filename
+    kw = dict(module=g.get("__name__", "seahough"),
+              registry=g.setdefault("__warningregistry__", {}))
+    try:   # (the globals let the line be shown from a zipped module's source)
+        warnings.warn_explicit(message, category, name, f.f_lineno, **kw,
+                               module_globals=None if name.startswith("<") else g)
+    except ImportError:   # (a loader that cannot give the source: python -c, the prompt)
+        warnings.warn_explicit(message, category, name, f.f_lineno, **kw)
 
 
 def interrupted(exc: BaseException, kind=KeyboardInterrupt) -> bool:
