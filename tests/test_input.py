@@ -64,9 +64,9 @@ def test_sixteen_bit_data_of_fewer_bits_is_said_once(monkeypatch):
     import warnings
 
     from seahough.errors import BitDepthWarning
-    from seahough.io import images
+    from seahough.io import levels
 
-    monkeypatch.setattr(images, "_SAID_BITS", set())
+    monkeypatch.setattr(levels, "_SAID_BITS", set())
     g = _scene()
     with warnings.catch_warnings(record=True) as w:
         warnings.simplefilter("always")
@@ -98,10 +98,10 @@ def test_a_unit_float_image_pushed_over_one_is_still_read_as_one(monkeypatch):
     import warnings
 
     from seahough.errors import LevelsWarning
-    from seahough.io import images
+    from seahough.io import levels
     from seahough.io.images import to_bgr8
 
-    monkeypatch.setattr(images, "_SAID_LEVELS", set())
+    monkeypatch.setattr(levels, "_SAID_LEVELS", set())
     g = _scene().astype(np.float32)
     unit = g / 255.0
     over = unit.copy()
@@ -317,3 +317,54 @@ def test_a_video_frame_by_its_name_and_every_frame_in_order(tmp_path, caplog):
         got = list(seahough.iter_frames([str(good), str(bad), str(good)]))
     assert [img is None for _, img in got] == [False, True, False]
     assert "bad.png" in caplog.text
+
+
+def test_a_dim_unit_float_image_is_said_with_its_file_name(tmp_path, monkeypatch, capsys):
+    """A sonar user's trial: linear backscatter as float32 0-0.05 (levels up to
+    12.8 of 255) was "not found" without a word, where a dark 16-bit file is
+    said (BitDepthWarning); and the CLI's float warnings named "image", not
+    the file. A 0-1 image reaching only under 16 of 255 levels is said once,
+    with its file's name and what to do."""
+    import warnings
+
+    from seahough.errors import LevelsWarning
+    from seahough.io import levels
+
+    monkeypatch.setattr(levels, "_SAID_LEVELS", set())
+    unit = _scene().astype(np.float32) / 255.0
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        to_gray(unit)                                  # 0-1, bright enough: nothing
+        to_gray(unit * 0.05, name="backscatter.tif")   # dim: said
+        to_gray(unit * 0.04)                           # (once)
+        to_gray(np.zeros((40, 40), np.float32))        # black: nothing to stretch
+    said = [str(x.message) for x in w]
+    assert said == ["backscatter.tif: a 0-1 float image whose values reach only 0.0431 (levels "
+                    "up to 11 of 255: too dark to show most edges); stretch it to 0-1 (numpy: "
+                    "image / image.max())"], said
+    assert all(issubclass(x.category, LevelsWarning) for x in w)
+    # the CLI names the file the warning is about
+    from seahough.cli import main
+    monkeypatch.setattr(levels, "_SAID_LEVELS", set())
+    path = tmp_path / "db.tif"
+    assert cv2.imwrite(str(path), (_scene().astype(np.float32) - 255.0) / 10.0)
+    with pytest.raises(SystemExit):
+        main(["detect", "circle:10", str(path)])
+    err = capsys.readouterr().err
+    assert f"warning: {path}: a float image read as levels 0-255, values down to" in err, err
+
+
+def test_a_warning_from_the_prompt_or_python_c_is_no_crash():
+    """A sonar user's trial: every seahough warning raised ImportError
+    ("'__main__' is not a built-in module") from ``python -c``, a script on
+    stdin and the interactive prompt: the warning's line was looked up
+    through __main__'s loader, which has no source to give."""
+    import subprocess
+    import sys
+
+    code = ("import numpy as np, seahough; seahough.Detector(seahough.Pattern.circle(8))"
+            ".detect(np.linspace(0, 3000, 64 * 64).reshape(64, 64).astype(np.uint16))")
+    for args, stdin in (([sys.executable, "-c", code], None), ([sys.executable, "-"], code)):
+        r = subprocess.run(args, input=stdin, capture_output=True, text=True, timeout=300)
+        assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr[-2000:]
+        assert "BitDepthWarning" in r.stderr, r.stderr[-2000:]

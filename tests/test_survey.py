@@ -587,12 +587,12 @@ def test_a_workers_first_image_is_timed_without_the_warm_up(scenes, monkeypatch)
 def test_a_workers_warning_names_the_file_on_one_line(tmp_path, capsys, monkeypatch):
     """A trial: a 12-bit PNG in a survey gave Python's form of the warning, from
     Dask's source line, with "image" for the file; seahough detect names it."""
-    import seahough.io.images as I
+    import seahough.io.levels as L
     from seahough.survey.detect import search_batch
 
     import warnings
 
-    monkeypatch.setattr(I, "_SAID_BITS", set())        # (said once a process)
+    monkeypatch.setattr(L, "_SAID_BITS", set())        # (said once a process)
     monkeypatch.setattr(warnings, "showwarning", warnings.showwarning)   # (restored after)
     img = np.zeros((120, 160), np.uint16)
     img[30:90, 40:120] = 4000

@@ -204,6 +204,27 @@ def format_line(angle: float, offset: float, decimals: int = 2) -> tuple[str, fl
     return text, (-float(offset) if wrapped else float(offset))
 
 
+def line_parameters(x: float, y: float, angle_deg: float, shape) -> tuple[float, float, float, float]:
+    """(line_angle, line_offset, foot_x, foot_y) of the line through (x, y) at
+    ``angle_deg``, relative to the centre of an image of ``shape``.
+
+    Examples
+    --------
+    >>> [round(v, 6) for v in line_parameters(10.0, 30.0, 180.0, (41, 61))]
+    [0.0, 10.0, 30.0, 30.0]
+    """
+    h, w = shape[:2]
+    cx, cy = (w - 1) / 2.0, (h - 1) / 2.0
+    a = angle_deg % 180.0
+    if a > 180.0 - 1e-6:     # (179.9999999999999: 0, its normal turned with it)
+        a = 0.0
+    t = math.radians(a)
+    n = np.array([math.sin(t), math.cos(t)])    # normal
+    off = float(n @ (np.array([x, y]) - [cx, cy]))
+    fx, fy = cx + off * n[0], cy + off * n[1]
+    return a, off, float(fx), float(fy)
+
+
 def matrix_power(matrix, t: float) -> np.ndarray:
     """A similarity's 2x3 matrix applied ``t`` times (any real ``t``: roots
     too), taken exactly from its first column (:meth:`Similarity.from_columns`).

@@ -442,7 +442,7 @@ class CurveSearch:
         self.piece_length, self.min_length = piece_length, min_length
         self.max_results, self.max_nfa = max_results, max_nfa
 
-    def search(self, image):
+    def search(self, image, *, name: str | None = None):
         from types import SimpleNamespace
 
         from ..core.blanks import find_blanks
@@ -451,7 +451,8 @@ class CurveSearch:
 
         cfg = self.config
         # (decoded once here: what was left out, captions and --ignore, is said too)
-        gray = to_gray(image, name=str(image) if isinstance(image, (str, Path)) else "image",
+        gray = to_gray(image, name=name or (str(image) if isinstance(image, (str, Path))
+                                           else "image"),
                        max_pixels=cfg.max_pixels, max_memory_mb=cfg.max_memory_mb,
                        bit_depth=cfg.bit_depth)
         declined: list = []       # (why no curve: the seed candidates' reasons)

@@ -113,7 +113,7 @@ def _search_one(name: str, stem: str | None, detector: Detector, pat, out_dir,
             top = int(img.max(initial=0))
             say_bits(top, name)
             bits = bits_warning(top)       # (and in its record)
-        res = detector.search(img)
+        res = detector.search(img, name=name)   # (its warnings name the file)
         res.warning = bits
     except SeahoughError as e:
         return e

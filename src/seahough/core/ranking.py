@@ -16,7 +16,7 @@ import numpy as np
 
 from . import kernels as K
 from .._values import ValueEquality
-from ..geometry import angle_difference, apply_matrix, pose_to_matrix
+from ..geometry import angle_difference, apply_matrix, line_parameters, pose_to_matrix
 from .candidates import Candidate, SearchContext, icp_subset
 from .features import Features
 from .keypoints import edge_points_near_image
@@ -161,27 +161,6 @@ def confidence(score: float, runner_up: float) -> float:
     (1.0, 0.1)
     """
     return float(np.clip((score - runner_up) / max(1.0 - runner_up, 1e-9), 0.0, 1.0))
-
-
-def line_parameters(x: float, y: float, angle_deg: float, shape) -> tuple[float, float, float, float]:
-    """(line_angle, line_offset, foot_x, foot_y) of the line through (x, y) at
-    ``angle_deg``, relative to the centre of an image of ``shape``.
-
-    Examples
-    --------
-    >>> [round(v, 6) for v in line_parameters(10.0, 30.0, 180.0, (41, 61))]
-    [0.0, 10.0, 30.0, 30.0]
-    """
-    h, w = shape[:2]
-    cx, cy = (w - 1) / 2.0, (h - 1) / 2.0
-    a = angle_deg % 180.0
-    if a > 180.0 - 1e-6:     # (179.9999999999999: 0, its normal turned with it)
-        a = 0.0
-    t = math.radians(a)
-    n = np.array([math.sin(t), math.cos(t)])    # normal
-    off = float(n @ (np.array([x, y]) - [cx, cy]))
-    fx, fy = cx + off * n[0], cy + off * n[1]
-    return a, off, float(fx), float(fy)
 
 
 # ------------------------------------------------------------ full resolution

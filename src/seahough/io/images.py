@@ -32,11 +32,11 @@ from PIL import Image
 
 from .._validate import number
 from ..config import MAX_MEMORY_MB
-from ..errors import (BitDepthWarning, ImageReadError, ImageSizeError, ImageValueError,
-                      LevelsWarning, ParameterError, WriteError, warn_at_caller)
+from ..errors import ImageReadError, ImageSizeError, ImageValueError, ParameterError, WriteError
 from ._decoders import (_Header, _decode_jpeg, _decode_png, _opencv_decode, _pillow_problem,
                         _quiet_opencv)
 from .hidden import fill_hidden, hidden_pixels
+from .levels import DIM_UNIT, OVERSHOOT, _unit_levels, say_bits, say_levels  # noqa: F401
 
 #: The smallest side, in pixels, an image must have to hold any edge.
 MIN_SIDE = 8
@@ -284,7 +284,7 @@ def to_gray(image, *, name: str = "image", max_pixels: int = 200_000_000,
     by ``(2**bit_depth - 1) / 255``, a camera's fewer bits in 16-bit files,
     then clipped to 255); floats in [0, 1] are multiplied by 255 (so are a
     0-1 image's few values pushed a little over 1 or under 0, saturated:
-    :data:`OVERSHOOT`); other floats are levels 0-255 as they are (a
+    :data:`~.levels.OVERSHOOT`); other floats are levels 0-255 as they are (a
     :class:`~seahough.errors.LevelsWarning` when they look like another
     scale: under -0.5, over 1024, a float64 image at most 10); a BGRA image's
     transparent pixels are filled (:func:`~seahough.io.hidden.fill_hidden`). A path is
@@ -377,6 +377,8 @@ def _levels(image, label, max_pixels, min_side, max_memory_mb, orientation,
             # (float32 is also what the package hands itself: a dark 8-bit frame
             # converted once is no "dim float image" of the user's)
             say_levels(lo, hi, label, dim=a.dtype != np.float32)
+        elif 0.0 < hi < DIM_UNIT:
+            say_levels(lo, hi, label, unit=True)
         if not unit and a.dtype == np.float32 and a.flags.c_contiguous and a.ndim == 2:
             # already the levels a search works on (a frame cropped and checked
             # before): no copy (a 12 MP frame's is 46 MB), a read-only view
@@ -408,85 +410,6 @@ def _levels(image, label, max_pixels, min_side, max_memory_mb, orientation,
     elif a.dtype != np.uint8:
         a = a.astype(np.float32)
     return a
-
-
-#: Float images in [0, 1] are scaled to 0-255; so are those within 1 of it (up
-#: to :data:`OVERSHOOT`) with at most :data:`OVERSHOOT_SHARE` of their values
-#: outside it, not whole numbers (colour correction's overshoot: saturated;
-#: whole numbers are a dark 8-bit frame's levels). Others are levels 0-255.
-OVERSHOOT = 2.0
-OVERSHOOT_SHARE = 0.05
-
-
-def _unit_levels(a: np.ndarray, lo: float, hi: float) -> bool:
-    """Whether float image ``a`` (its least and largest values ``lo``,
-    ``hi``) holds 0-1 levels (see :data:`OVERSHOOT`).
-
-    >>> img = np.full((10, 10), 0.5, np.float32); img[0, 0] = 1.02; img[1, 1] = -0.01
-    >>> _unit_levels(img, -0.01, 1.02), _unit_levels(img * 255, -2.55, 260.1)
-    (True, False)
-    >>> dark = np.zeros((10, 10), np.float32); dark[0, :3] = 2.0   # (8-bit levels 0-2)
-    >>> _unit_levels(dark, 0.0, 2.0)
-    False
-    """
-    if lo < 1.0 - OVERSHOOT or hi > OVERSHOOT:
-        return False
-    if lo >= 0.0 and hi <= 1.0:
-        return True
-    out = a[(a > 1.0) | (a < 0.0)]
-    return bool(out.size <= OVERSHOOT_SHARE * a.size and np.any(out != np.round(out)))
-
-
-#: The kinds of float levels :class:`~seahough.errors.LevelsWarning` was given for.
-_SAID_LEVELS: set = set()
-
-
-def say_levels(lo: float, hi: float, label: str, dim: bool = True) -> None:
-    """Warn, once a process for each kind, that a float image taken as levels
-    0-255 (values ``lo`` to ``hi``) looks like another scale: values under
-    -0.5 (a -1..1 image), over 1024, or (``dim``: not for float32, the
-    package's own levels) a largest value of at most 10 (a dark frame, or a
-    0-1 image with too many values over 1 to be read as one)."""
-    if lo < -0.5:
-        kind, why = "negative", f"values down to {lo:.3g}: below 0 is black"
-    elif hi <= 10.0 and dim:
-        kind, why = "dim", (f"values only up to {hi:.3g} of 255: too dark to show most edges "
-                            f"(a 0-1 image is scaled only when at most "
-                            f"{100 * OVERSHOOT_SHARE:g} % of its values are over 1, up to "
-                            f"{OVERSHOOT:g})")
-    elif hi > 1024.0:
-        kind, why = "large", f"values up to {hi:.3g}: far over 255, every edge is strong"
-    else:
-        return
-    if kind in _SAID_LEVELS:
-        return
-    _SAID_LEVELS.add(kind)
-    warn_at_caller(f"{label}: a float image read as levels 0-255, {why}; scale it to 0-1 or "
-                   "0-255", LevelsWarning)
-
-
-#: The numbers of bits :class:`~seahough.errors.BitDepthWarning` was given for.
-_SAID_BITS: set = set()
-
-
-def say_bits(top: int, label: str) -> None:
-    """Warn, once a process for each number of bits, that a uint16 image read as
-    16-bit data has values of fewer bits (``top``: its largest, 1-4095)."""
-    if not 0 < top < 4096:
-        return
-    bits = top.bit_length()
-    if bits in _SAID_BITS:
-        return
-    _SAID_BITS.add(bits)
-    if bits <= 8:
-        what = "8-bit data in a 16-bit file? convert it to uint8 (numpy: .astype(np.uint8))"
-    else:   # (a guess from its brightest value: a dark frame needs fewer bits)
-        what = (f"a camera's 10-14-bit samples ({bits} bits hold these)? give its bit depth: "
-                f"Config(bit_depth={max(bits, 10)}), CLI --bit-depth {max(bits, 10)} (a "
-                f"12-bit camera: 12)")
-    warn_at_caller(f"{label}: a 16-bit image whose values reach only {top}, read as 16-bit data "
-                   f"(levels up to {top / 257.0:.3g} of 255: too dark to show most edges); {what}",
-                   BitDepthWarning)
 
 
 def uint16_divisor(bit_depth: int | None = None) -> float:
