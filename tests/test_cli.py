@@ -1168,6 +1168,31 @@ def test_detect_reads_a_video_frame_by_frame(tmp_path):
         f"dive_{i:05d}_overlay.png" for i in range(4)]
 
 
+def test_a_video_frame_by_name_in_odometry_and_names_that_are_no_frame(tmp_path):
+    """A video analyst's trial: ``odometry "dive.mp4#5" "dive.mp4#6"`` was "no
+    such file or folder" (detect and run_odometry took them); "dive.mp4#3-5"
+    and "#03" were "no such file" though the video is there; --fps beside a
+    video changed nothing, unsaid."""
+    path = moving_rectangle_video(tmp_path / "dive.mp4", 6)
+    proc = run("odometry", f"{path}#2", f"{path}#3", f"{path}#4", "--out", tmp_path / "o",
+               "--no-mosaic", "-q", "--fps", 20)
+    assert proc.returncode in (0, 1), proc.stderr
+    rows = list(csv.DictReader((tmp_path / "o" / "odometry.csv").open()))
+    assert [r["file"] for r in rows] == [f"{path}#{k}" for k in (2, 3, 4)]
+    assert [float(r["time"]) for r in rows] == [0.4, 0.6, 0.8]     # (its own 5 fps)
+    assert proc.stderr == ""                                        # (-q: no note)
+    proc = run("odometry", path, "--out", tmp_path / "o2", "--no-mosaic", "--fps", 20)
+    assert f"note: --fps 20 is for frames without a time: the frames of {path} take its own " \
+        "rate (5 fps)" in proc.stderr, proc.stderr
+    for cmd in (["odometry", "--out", tmp_path / "o3"], ["detect", "rect:60,40"]):
+        for bad, example in (("3-5", 12), ("03", 3), ("abc", 12)):
+            proc = run(*cmd, f"{path}#{bad}", f"{path}#1")
+            assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr
+            assert proc.stderr.strip() == (
+                f"seahough: error: {path}#{bad}: '{bad}' is no frame number (a video's frame is "
+                f"named {path}#{example}, counted from 0; every frame: {path})"), proc.stderr
+
+
 def test_odometry_notes_a_scene_whose_scale_changes_much(tmp_path):
     """A camera that looks ahead (or an altitude that changes much) makes the
     scene's scale drift: a user's forward-looking pool video reached 1.8x

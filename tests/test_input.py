@@ -301,8 +301,10 @@ def test_a_video_frame_by_its_name_and_every_frame_in_order(tmp_path, caplog):
     frames = list(seahough.iter_frames(path))
     assert [str(n) for n, _ in frames] == [str(n) for n in names]
     assert np.array_equal(frames[2][1], third)
-    with pytest.raises(seahough.ImageReadError, match="no such file"):
+    with pytest.raises(seahough.ImageReadError, match="'x' is no frame number .*dive.avi#12"):
         seahough.read_image(tmp_path / "dive.avi#x")
+    with pytest.raises(seahough.ImageReadError, match="no such file"):
+        seahough.read_image(tmp_path / "other.avi#1")
     # a folder that is not there: at the call, not at the first frame
     with pytest.raises(seahough.ParameterError, match="no such"):
         seahough.iter_frames(tmp_path / "nowhere")

@@ -459,6 +459,9 @@ def test_video_file_and_grey_16bit_frames(tmp_path):
         f"{video2}#{i}" for i in range(3)]
     assert all(r["status"] != "unreadable" for r in two.rows)
     assert two.rows[7]["x"] == pytest.approx(res.rows[7]["x"])   # the first video as alone
+    # one time line: the second video's frames come after the first's 8 (at 5 fps), not
+    # at 0 again (a user's velocities from the time column were wrong)
+    assert [r["time"] for r in two.rows] == pytest.approx([0.2 * i for i in range(11)])
     bad = tmp_path / "broken.avi"
     bad.write_bytes(b"not a video")
     with pytest.raises(seahough.ParameterError, match="broken.avi: (cannot open|.*no frame)"):

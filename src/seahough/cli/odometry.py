@@ -10,7 +10,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..io.frames import printable
+from ..io.frames import printable, split_video_ref, video_ref_problem
 from ._common import (_Fail, _dumps, _range_callback, _say_kept, _stderr_is_terminal, _Terminated,
                       bit_depth_option, workers_option)
 
@@ -173,6 +173,8 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
       seahough odometry dive/frames --out track --altitude 2.5 --focal-px 800
     """
     check_inputs(frames, metres_per_pixel, altitude, focal_px)
+    if fps is not None and not quiet:
+        _say_video_rates(frames, fps)
     # looked up when the command runs (tests stand a stub in for the module)
     from ..motion.odometry import run_odometry
 
@@ -194,6 +196,24 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
         # was kept is said the same way; a trial saw a bare "interrupted")
         _say_kept(e, _kept(out))
     return report(result, time.perf_counter() - t0, unit, as_json)
+
+
+def _say_video_rates(frames, fps: float) -> None:
+    """A note for each video whose frames keep their own rate over ``--fps``
+    (a user's --fps 20 on a 5 fps video changed nothing, unsaid)."""
+    import cv2
+
+    from ..io.frames import VIDEO_EXTENSIONS
+
+    videos = dict.fromkeys((split_video_ref(f) or (f,))[0] for f in frames)
+    for v in videos:
+        if Path(v).suffix.lower() in VIDEO_EXTENSIONS and Path(v).is_file():
+            cap = cv2.VideoCapture(v)
+            rate = float(cap.get(cv2.CAP_PROP_FPS) or 0.0) if cap.isOpened() else 0.0
+            cap.release()
+            if rate > 0:
+                click.echo(f"seahough: note: --fps {fps:g} is for frames without a time: the "
+                           f"frames of {printable(v)} take its own rate ({rate:g} fps)", err=True)
 
 
 def _rows_in(out) -> int | None:
@@ -236,7 +256,9 @@ def check_inputs(frames, metres_per_pixel, altitude, focal_px) -> None:
         raise click.UsageError("--altitude and --focal-px go together")
     for f in frames:
         if not Path(f).exists() and not os.path.islink(f):   # (a broken link: flagged)
-            raise _Fail(f"{printable(f)}: no such file or folder")
+            ref = split_video_ref(f)      # (a video's frame: "dive.mp4#12")
+            if ref is None or not Path(ref[0]).is_file():
+                raise _Fail(printable(video_ref_problem(f) or f"{f}: no such file or folder"))
 
 
 #: the end note that a run's scale changed (a camera looking ahead, an

@@ -131,11 +131,37 @@ def _is_video(p: Path) -> bool:
 
 
 def split_video_ref(s: str):
-    """``("video.mp4", 12)`` for ``"video.mp4#12"``, else None."""
-    m = re.match(r"^(.*)#(\d+)$", s)
+    """``("video.mp4", 12)`` for ``"video.mp4#12"``, else None (also for
+    ``"video.mp4#012"``: a frame is named one way, :func:`video_ref_problem`)."""
+    m = re.match(r"^(.*)#(0|[1-9]\d*)$", s)
     if m and _is_video(Path(m.group(1))):
         return m.group(1), int(m.group(2))
     return None
+
+
+def video_ref_problem(s: str) -> str | None:
+    """Why ``s``, an existing video's name and ``#`` something, names none of
+    its frames (a user's ``dive.mp4#3-5`` was "no such file"); None when it
+    is no such name.
+
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     video = os.path.join(d, "dive.mp4")
+    ...     open(video, "wb").close()
+    ...     print(video_ref_problem(video + "#3-5").replace(d, "D"))
+    ...     print(video_ref_problem(video + "#007").replace(d, "D"))
+    ...     print(video_ref_problem(video + "#7"), video_ref_problem(d + "/x.mp4#1-2"))
+    D/dive.mp4#3-5: '3-5' is no frame number (a video's frame is named D/dive.mp4#12, counted from 0; every frame: D/dive.mp4)
+    D/dive.mp4#007: '007' is no frame number (a video's frame is named D/dive.mp4#7, counted from 0; every frame: D/dive.mp4)
+    None None
+    """
+    video, sep, frame = s.rpartition("#")
+    if not sep or not _is_video(Path(video)) or not Path(video).is_file() \
+            or split_video_ref(s) is not None:
+        return None
+    example = str(int(frame)) if frame.isdigit() else "12"
+    return (f"{s}: {frame!r} is no frame number (a video's frame is named {video}#{example}, "
+            f"counted from 0; every frame: {video})")
 
 
 def _video_frames(path: Path) -> list[str]:
@@ -258,7 +284,7 @@ def list_frames(frames) -> list:
                                      "folder alone")
             # (a broken link is listed, not a typo: its frame is flagged as unreadable)
             if not Path(s).exists() and not os.path.islink(s) and split_video_ref(s) is None:
-                raise ParameterError(f"{s}: no such file")
+                raise ParameterError(video_ref_problem(s) or f"{s}: no such file")
             if _is_video(Path(s)) and Path(s).is_file():
                 out.extend(_video_frames(Path(s)))   # each video of a list: its frames
             else:
@@ -433,6 +459,7 @@ class FrameReader:
         self._cap_path = None
         self._cap_next = 0
         self._fps = {}
+        self._starts = None
 
     def name(self, i: int) -> str:
         it = self.items[i]
@@ -450,8 +477,9 @@ class FrameReader:
 
     def time(self, i: int) -> float | None:
         """Frame ``i``'s time, seconds: from its name (:func:`time_from_name`),
-        or a video's frame rate; else ``i / fps`` when the reader was given
-        one (seconds since the first frame); else None.
+        or a video's frame rate (seconds since the start of the first video
+        listed: several videos make one time line); else ``i / fps`` when
+        the reader was given one (seconds since the first frame); else None.
 
         >>> r = FrameReader(["a.png", "cam_00_00_21.500.png", np.zeros((8, 8))], 100, fps=4)
         >>> r.time(0), r.time(1), r.time(2), FrameReader(["a.png"], 100).time(0)
@@ -463,12 +491,31 @@ class FrameReader:
             ref = split_video_ref(str(it))
             if ref is not None:
                 fps = self._video_fps(ref[0])
-                t = ref[1] / fps if fps > 0 else None
+                t = self._video_start(ref[0]) + ref[1] / fps if fps > 0 else None
             else:
                 t = time_from_name(str(it))
         if t is None and self.fps:
             t = i / float(self.fps)
         return t
+
+    def _video_start(self, path: str) -> float:
+        """Seconds before the first frame of video ``path``: the length of the
+        videos listed before it (one time line over a dive's several files:
+        a second video's times started at 0 again, and a velocity from them
+        was wrong), each up to its last frame listed."""
+        if self._starts is None:
+            last: dict = {}       # (each video's last frame listed, in the order they come)
+            for it in self.items:
+                ref = None if isinstance(it, np.ndarray) or it is None \
+                    else split_video_ref(str(it))
+                if ref is not None:
+                    last[ref[0]] = max(last.get(ref[0], -1), ref[1])
+            self._starts, t = {}, 0.0
+            for video, k in last.items():
+                self._starts[video] = t
+                fps = self._video_fps(video)
+                t += (k + 1) / fps if fps > 0 else 0.0
+        return self._starts.get(path, 0.0)
 
     def _video_fps(self, path: str) -> float:
         if path not in self._fps:

@@ -207,7 +207,7 @@ def read_image(path: str | os.PathLike, *, max_pixels: int = 200_000_000,
     number("max_memory_mb", max_memory_mb, lo=0.0, lo_open=True)
     p = Path(path)
     if not p.exists():
-        from .frames import FrameReader, printable, split_video_ref
+        from .frames import FrameReader, printable, split_video_ref, video_ref_problem
 
         ref = split_video_ref(str(path))
         if ref is not None and Path(ref[0]).is_file():
@@ -221,7 +221,7 @@ def read_image(path: str | os.PathLike, *, max_pixels: int = 200_000_000,
         if os.path.islink(p):   # (the folder shows it: say why it cannot be read)
             raise ImageReadError(f"{p}: broken symbolic link (to "
                                  f"{printable(os.readlink(p))})")
-        raise ImageReadError(f"{p}: no such file")
+        raise ImageReadError(video_ref_problem(str(path)) or f"{p}: no such file")
     if p.is_dir():
         raise ImageReadError(f"{p}: is a folder, not an image")
     try:
