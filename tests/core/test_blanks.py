@@ -10,7 +10,7 @@ import pytest
 
 import seahough
 from seahough.core import blanks as B
-from seahough.core.blanks import Caption, caption_boxes, fill_blanks, find_blanks
+from seahough.core.blanks import Caption, caption_boxes, fill_blanks, find_blanks, no_data
 
 from conftest import data_path
 
@@ -279,3 +279,43 @@ def test_ignored_regions_beside_a_bar_each_other_and_the_whole_image():
     res = seahough.Detector(seahough.Pattern.rectangle(60, 40),
                             config=seahough.Config(ignore=[(0, 0, 320, 240)])).search(img)
     assert res.detections == [] and res.note == "no edges"
+
+
+def _sonar_fan(pipe: bool, seed: int = 0) -> np.ndarray:
+    """A forward-looking sonar's picture: speckle in a fan (110 degrees, ranges
+    40-310 px), black beyond it; ``pipe``: a bright band across the fan."""
+    rng = np.random.default_rng(seed)
+    h, w = 320, 480
+    img = cv2.GaussianBlur(rng.rayleigh(40, (h, w)).astype(np.float32), (0, 0), 1.2)
+    if pipe:
+        cv2.line(img, (150, 250), (330, 120), 200.0, 9, cv2.LINE_AA)
+    yy, xx = np.mgrid[:h, :w]
+    r = np.hypot(xx - 240, yy - 330)
+    a = np.degrees(np.arctan2(xx - 240, 330 - yy))
+    img[(r > 310) | (r < 40) | (np.abs(a) > 55)] = 0
+    return np.clip(img, 0, 255).astype(np.uint8)
+
+
+def test_the_black_beyond_a_sonar_fan_is_no_data():
+    """A sonar analyst's trial: the straight sides of a forward-looking
+    sonar's fan were "found" as lines (NFA 1e-12) in a fan with nothing in
+    it. The flat black area joined to the picture's edge is filled from the
+    fan before the search (as transparent pixels are); a pipe in the fan is
+    still found, and a drawn shape's black canvas, a label mask's classes
+    or a photo's dark water that fades are left as they are."""
+    line = seahough.Detector(seahough.Pattern.line(120, 8), angle_range=(0, 180))
+    assert line.detect(_sonar_fan(False)) == []
+    found = line.detect(_sonar_fan(True))
+    assert len(found) == 1 and abs(found[0].x - 252) < 6 and abs(found[0].y - 177) < 6
+    blanks = find_blanks(_sonar_fan(False).astype(np.float32))
+    assert blanks.no_data is not None and 0.3 < blanks.no_data.mean() < 0.5
+    # a white box on a black canvas (94 % black), one beside a grey bar at the
+    # edge: drawn pictures, not data beyond a picture
+    canvas = np.zeros((240, 320), np.float32)
+    cv2.rectangle(canvas, (100, 80), (180, 140), 200, -1)
+    assert no_data(canvas) is None
+    cv2.rectangle(canvas, (0, 100), (150, 239), 150, -1)
+    assert no_data(canvas) is None
+    # the dark water in the amphora wreck's corner fades into the picture: kept
+    photo = cv2.imread(str(data_path("sequences/aqualoc_amphorae_wreck/frame_060.png")), 0)
+    assert no_data(photo.astype(np.float32)) is None

@@ -7,7 +7,7 @@ objects (:func:`find_blanks`), and filled from the picture beside them
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
@@ -192,12 +192,15 @@ class Caption:
 class Blanks:
     """What :func:`fill_blanks` fills: ``border`` the picture without its
     blank border (x0, y0, x1, y1, end exclusive; :func:`blank_border`), the
-    burned-in ``captions`` inside it (:func:`caption_boxes`) and the regions
-    a user asked to leave out (``Config.ignore``, clipped to the image)."""
+    burned-in ``captions`` inside it (:func:`caption_boxes`), the regions
+    a user asked to leave out (``Config.ignore``, clipped to the image) and
+    the ``no_data`` pixels beyond the picture (a sonar's fan: :func:`no_data`)."""
 
     border: tuple[int, int, int, int]
     captions: tuple[Caption, ...] = ()
     ignored: tuple[tuple[int, int, int, int], ...] = ()
+    #: the pixels of a flat black area beyond the picture (:func:`no_data`), or None
+    no_data: np.ndarray | None = field(default=None, repr=False, compare=False)
 
 
 def caption_boxes(image: np.ndarray, border=None) -> tuple[Caption, ...]:
@@ -343,6 +346,73 @@ def _captions_in(image: np.ndarray, region, border, dark: bool) -> list:
     return out
 
 
+#: A flat black area joined to the picture's edge is no data when its levels
+#: are at most this (0-255: JPEG's black is 0-3) ...
+NO_DATA_LEVEL = 4.0
+#: ... it holds this share of the picture, at least and at most (a drawn
+#: shape's black canvas holds more: 83-94 %, and the segmentation masks of
+#: ../shared/data 63-98 %; the fan of a forward-looking sonar about 40 %) ...
+NO_DATA_SHARE = (0.02, 0.6)
+#: ... the picture steps up from it by BLANK_STEP levels 3-5 px beyond it along
+#: this share of its border (the dark water of the amphora wreck's corner
+#: fades: 0-4 % of its border; a sonar's fan: 95-100 %) ...
+NO_DATA_STEP = 0.75
+#: ... and this share of the rest is texture (5x5 standard deviation of at
+#: least 2 levels: a label mask's flat classes 2-3 %, a hazy pool 10 %,
+#: sonar speckle and photos 50-100 %). Its pixels and NO_DATA_GROW px
+#: beyond them (JPEG's smear of the step) are filled, as transparent ones
+#: are (:func:`seahough.io.hidden.fill_hidden`).
+NO_DATA_TEXTURE = 0.5
+NO_DATA_GROW = 3
+
+
+def no_data(gray: np.ndarray, border=None) -> np.ndarray | None:
+    """The pixels of a flat black area beyond the picture (a boolean mask,
+    or None): the outside of a forward-looking sonar's fan, a photo turned
+    on a black canvas (a user trial: both sides of a sonar's fan "found" as
+    lines at NFA 1e-12, the fan empty). ``gray``: levels 0-255; ``border``:
+    its :func:`blank_border` (found when None), outside which it looks.
+
+    >>> rng = np.random.default_rng(0)
+    >>> img = rng.uniform(40, 200, (120, 160)).astype(np.float32)
+    >>> yy, xx = np.mgrid[:120, :160]
+    >>> img[np.abs(xx - 80) > 0.8 * (120 - yy)] = 0        # black beside a fan (apex down)
+    >>> mask = no_data(img)
+    >>> bool(mask[115, 5]), bool(mask[5, 80]), bool(mask[110, 80]), round(float(mask.mean()), 2)
+    (True, False, False, 0.43)
+    >>> no_data(np.zeros((120, 160), np.float32)) is None  # (all black: no picture)
+    True
+    """
+    x0, y0, x1, y1 = blank_border(gray) if border is None else border
+    p = _grey(gray)[y0:y1, x0:x1].astype(np.float32, copy=False)
+    h, w = p.shape[:2]
+    if h < 16 or w < 16 or min(p[0].min(), p[-1].min(), p[:, 0].min(),
+                                p[:, -1].min()) > NO_DATA_LEVEL:
+        return None      # (most frames: nothing black at the edge, nothing more to do)
+    m = cv2.blur(p, (5, 5))
+    sd = np.sqrt(np.maximum(cv2.blur(p * p, (5, 5)) - m * m, 0.0))
+    dark = ((p <= NO_DATA_LEVEL) & (sd < BLANK_STD)).astype(np.uint8)
+    n, lab, stats, _ = cv2.connectedComponentsWithStats(dark, connectivity=4)
+    edge = np.unique(np.concatenate([lab[0], lab[-1], lab[:, 0], lab[:, -1]]))
+    keep = np.zeros(n, bool)
+    keep[edge[stats[edge, cv2.CC_STAT_AREA] >= NO_DATA_SHARE[0] * h * w]] = True
+    keep[0] = False
+    mask = keep[lab]
+    if not mask.any() or mask.mean() > NO_DATA_SHARE[1]:
+        return None
+    grow = lambda r: cv2.dilate(mask.view(np.uint8), np.ones((2 * r + 1,) * 2, np.uint8)) > 0
+    grown = grow(NO_DATA_GROW)
+    ring = grow(NO_DATA_GROW + 2) & ~grow(2)   # (3-5 px beyond: the flat test's 5x5 left 2)
+    ring[[0, -1], :] = False
+    ring[:, [0, -1]] = False
+    if not ring.any() or np.mean(p[ring] >= NO_DATA_LEVEL + BLANK_STEP) < NO_DATA_STEP \
+            or np.mean(sd[~grown] >= 2.0) < NO_DATA_TEXTURE:
+        return None
+    out = np.zeros(gray.shape[:2], bool)
+    out[y0:y1, x0:x1] = grown
+    return out
+
+
 def find_blanks(image: np.ndarray, ignore=()) -> Blanks:
     """The :class:`Blanks` of a frame (grey or colour, levels 0-255 as a
     search sees them: an image in other units, 16-bit levels or floats in
@@ -366,7 +436,7 @@ def find_blanks(image: np.ndarray, ignore=()) -> Blanks:
     # (regions that overlap or touch as one: each is filled from the lines around
     # it, which must not lie in another still to be filled)
     return Blanks(border, caption_boxes(image, border),
-                  tuple(_merged_boxes(boxes, touching=True)))
+                  tuple(_merged_boxes(boxes, touching=True)), no_data(image, border))
 
 
 def fill_blanks(image: np.ndarray, blanks: Blanks | None = None) -> np.ndarray:
@@ -384,8 +454,12 @@ def fill_blanks(image: np.ndarray, blanks: Blanks | None = None) -> np.ndarray:
     (True, True)
     """
     blanks = find_blanks(image) if blanks is None else blanks
-    if blanks.ignored or blanks.captions:
+    if blanks.ignored or blanks.captions or blanks.no_data is not None:
         image = image.copy()
+    if blanks.no_data is not None:   # (first: the captions and regions are filled beside it)
+        from ..io.hidden import fill_hidden
+
+        image = fill_hidden(image.astype(np.float32, copy=False), blanks.no_data)
     bx0, by0, bx1, by1 = blanks.border
     # the regions to leave out first, within the picture (the bars are filled
     # after, from it): a caption beside one is then filled from its fill
