@@ -124,6 +124,26 @@ def test_no_curve_says_why_and_what_to_change():
     assert seahough.find_curves(arc_image(), 8, declined=why) and why == []
 
 
+def test_a_seed_declined_for_its_nfa_over_both_searches_says_that_nfa():
+    """A sonar user's trial read "nfa 5.1e-01: NFA 1.01 (the line's, counted
+    over the 2 seed searches) over max_nfa 1": two NFAs, one under the limit
+    it was said to exceed. The candidate carries the NFA its reason counts."""
+    import math
+    from types import SimpleNamespace
+
+    from seahough.core.candidates import Candidate
+    from seahough.core.curves import _declined_seeds
+    from seahough.core.nfa import Evidence
+
+    c = Candidate(None, 10.0, 0.82, evidence=Evidence(40, 33, 0.1, math.log10(0.505)))
+    res = SimpleNamespace(candidates=[c], detections=[SimpleNamespace(score=0.82, nfa=c.nfa)])
+    why = "NFA 1.01 over max_nfa 1 (the line's, counted over the 2 seed searches)"
+    out = _declined_seeds(res, {0: why}, 2)
+    assert len(out) == 1 and out[0].declined == why and out[0].nfa == pytest.approx(1.01)
+    assert c.nfa == pytest.approx(0.505)                    # (the search's own: unchanged)
+    assert _declined_seeds(res, {0: why})[0].nfa == pytest.approx(0.505)   # one search
+
+
 def test_dark_cables_searched_as_bright_ropes_give_nothing():
     """Simulated dark cables in water (seeds no benchmark uses): each is found
     at its own polarity; at the default (bright) none gives a curve (6 of 15

@@ -567,8 +567,8 @@ def find_curves(image, width, *, width_range=(0.5, 1.5), polarity="bright",
             if len(curves) >= max_curves:
                 break
             if det.nfa * len(seeds) > max_nfa:
-                why[i] = (f"NFA {det.nfa * len(seeds):.3g} (the line's, counted over the "
-                          f"{len(seeds)} seed searches) over max_nfa {max_nfa:.3g}")
+                why[i] = (f"NFA {det.nfa * len(seeds):.3g} over max_nfa {max_nfa:.3g} (the "
+                          f"line's, counted over the {len(seeds)} seed searches)")
                 continue
             c = _trace(det, res, gray, w, s_range, length, step_cfg, max_turn,
                        max_nfa * STEP_NFA_SHARE, [c.points for c in curves], polarity)
@@ -581,14 +581,15 @@ def find_curves(image, width, *, width_range=(0.5, 1.5), polarity="bright",
                 c.nfa *= len(seeds)
                 curves.append(c)
         if declined is not None and not curves:
-            declined.extend(_declined_seeds(res, why))
+            declined.extend(_declined_seeds(res, why, len(seeds)))
     return curves
 
 
-def _declined_seeds(res, why: dict) -> list:
+def _declined_seeds(res, why: dict, seeds: int = 1) -> list:
     """The candidates of a seed search ``res`` that made no curve, best first:
     its declined ones as they are, its detections (accepted candidates) with
-    ``why`` (by detection index) as their reason."""
+    ``why`` (by detection index) as their reason, and their NFA counted over
+    the ``seeds`` seed searches."""
     key = lambda c: (round(c.score, 9), round(c.nfa, 12) if math.isfinite(c.nfa) else c.nfa)
     found = {key(c): c for c in res.candidates if not c.declined}
     out = []
@@ -596,5 +597,9 @@ def _declined_seeds(res, why: dict) -> list:
         c = found.pop((round(d.score, 9), round(d.nfa, 12) if math.isfinite(d.nfa) else d.nfa),
                       None)
         if c is not None and i in why:
-            out.append(replace(c, declined=why[i]))
+            # (its NFA as the reason counts it: over the seed searches, once said beside
+            # "NFA 1.01 ... over max_nfa 1" as 0.51)
+            ev = c.evidence if c.evidence is None or seeds == 1 else replace(
+                c.evidence, log10_nfa=c.evidence.log10_nfa + math.log10(seeds))
+            out.append(replace(c, declined=why[i], evidence=ev))
     return out + [c for c in res.candidates if c.declined]
