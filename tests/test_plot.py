@@ -742,6 +742,14 @@ def test_a_line_is_drawn_along_the_part_of_the_rope_the_image_shows(tmp_path, se
         im = read_png(tmp_path / "rope.png")
         x0, x1 = _red_extent_along(fig, im, a, truth.x, truth.y, 8)
         assert abs(x0 - visible[0]) < 32 and abs(x1 - visible[1]) < 32, (visible, x0, x1)
+        # the detection says that extent too (a sonar user's JSON box lay 85-167 px
+        # along a pipe the overlay drew over 0-72): its segment, and its box there
+        seg = dets[0].segment
+        assert seg is not None and seg.shape == (2, 2)
+        assert abs(seg[:, 0].min() - x0) < 4 and abs(seg[:, 0].max() - x1) < 4, (seg, x0, x1)
+        rec = dets[0].to_dict()
+        assert np.allclose(rec["segment"], seg, atol=1e-3)
+        assert abs(rec["box"][0] - seg[:, 0].min()) < 4 and abs(rec["box"][2] - seg[:, 0].max()) < 4
 
 
 def test_a_line_without_a_visible_extent_is_drawn_across_the_image(tmp_path):

@@ -282,12 +282,10 @@ def _profile(gray, x, y, d, stretch, lo, hi, polarity):
 def _near(polylines, x: float, y: float, tol: float) -> bool:
     """Is (x, y) within ``tol`` px of one of the polylines?"""
     q = np.array([x, y])
-    for p in polylines:
-        a, ab = p[:-1], np.diff(p, axis=0)
+    def near(a, ab):   # (of one polyline: its segments a -> a + ab)
         t = np.clip(np.einsum("ij,ij->i", q - a, ab) / np.maximum((ab ** 2).sum(1), 1e-12), 0, 1)
-        if (np.hypot(*(a + t[:, None] * ab - q).T) < tol).any():
-            return True
-    return False
+        return (np.hypot(*(a + t[:, None] * ab - q).T) < tol).any()
+    return any(near(p[:-1], np.diff(p, axis=0)) for p in polylines)
 
 
 def _bridge(a: _Piece, b: _Piece, n: int) -> list:
@@ -588,17 +586,14 @@ def find_curves(image, width, *, width_range=(0.5, 1.5), polarity="bright",
 def _declined_seeds(res, why: dict, seeds: int = 1) -> list:
     """The candidates of a seed search ``res`` that made no curve, best first:
     its declined ones as they are, its detections (accepted candidates) with
-    ``why`` (by detection index) as their reason, and their NFA counted over
-    the ``seeds`` seed searches."""
+    ``why`` (by detection index) as their reason, and their NFA counted, as
+    that reason counts it, over the ``seeds`` seed searches."""
     key = lambda c: (round(c.score, 9), round(c.nfa, 12) if math.isfinite(c.nfa) else c.nfa)
     found = {key(c): c for c in res.candidates if not c.declined}
     out = []
     for i, d in enumerate(res.detections):
-        c = found.pop((round(d.score, 9), round(d.nfa, 12) if math.isfinite(d.nfa) else d.nfa),
-                      None)
+        c = found.pop(key(d), None)
         if c is not None and i in why:
-            # (its NFA as the reason counts it: over the seed searches, once said beside
-            # "NFA 1.01 ... over max_nfa 1" as 0.51)
             ev = c.evidence if c.evidence is None or seeds == 1 else replace(
                 c.evidence, log10_nfa=c.evidence.log10_nfa + math.log10(seeds))
             out.append(replace(c, declined=why[i], evidence=ev))

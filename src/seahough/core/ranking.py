@@ -19,6 +19,7 @@ from .._values import ValueEquality
 from ..geometry import angle_difference, apply_matrix, line_parameters, pose_to_matrix
 from .candidates import Candidate, SearchContext, icp_subset
 from .features import Features
+from .lines import visible_segment
 from .keypoints import edge_points_near_image
 from .nfa import CELL, background, evidence, log10_tests
 from .parts import hole_labels, unseen_hole
@@ -108,6 +109,9 @@ class Detection(ValueEquality):
     pattern : str
         Which pattern this is, for a Detector of several named patterns
         (``""`` for a Detector of one pattern).
+    segment : ndarray (2, 2) or None
+        A line's visible extent, ``[[x0, y0], [x1, y1]]`` (:mod:`.lines`; a
+        pipe's length; ``box`` in ``to_dict`` is the band's there), or None.
     """
 
     x: float
@@ -125,6 +129,7 @@ class Detection(ValueEquality):
     flags: tuple = ()
     nfa: float = float("nan")
     pattern: str = ""
+    segment: np.ndarray | None = field(default=None, repr=False)
 
     def to_dict(self) -> dict:
         """Plain-Python form for JSON; with an outline, ``box``: its bounding box
@@ -142,10 +147,16 @@ class Detection(ValueEquality):
              "matrix": np.asarray(self.matrix).tolist(), "votes": self.votes,
              "kind": self.kind, "flags": list(self.flags),
              "nfa": self.nfa if math.isfinite(self.nfa) else None, "pattern": self.pattern}
+        seg = None if self.segment is None else np.asarray(self.segment, float)
         if self.kind == "line":
-            d.update(line_angle=self.line_angle, line_offset=self.line_offset)
+            d.update(line_angle=self.line_angle, line_offset=self.line_offset,
+                     segment=None if seg is None else seg.round(3).tolist())
         if self.outline:
             pts = np.vstack(self.outline)
+            if seg is not None:   # (the band there: the outline's length is the pattern's)
+                a = math.radians(self.line_angle)
+                n = np.array([math.sin(a), math.cos(a)])
+                pts = np.vstack([seg - np.ptp(pts @ n) / 2 * n, seg + np.ptp(pts @ n) / 2 * n])
             d["box"] = [float(v) for v in (*pts.min(axis=0), *pts.max(axis=0))]
             d["outline"] = [np.asarray(o, float).round(3).tolist() for o in self.outline]
         return d
@@ -482,7 +493,7 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
                           f"(a look-alike scores {runner_up:.3g} to its {c.work_score:.3g}, "
                           "coarse)")
             continue
-        dets.append(to_detection(ctx, c, conf, gray.shape))
+        dets.append(to_detection(ctx, c, conf, gray))
     dets.sort(key=lambda d: -d.score)
     return dets
 
@@ -557,8 +568,9 @@ def search_tests(ctx: SearchContext) -> float:
             + math.log10(ctx.searches))
 
 
-def to_detection(ctx: SearchContext, c: Candidate, conf: float, shape) -> Detection:
-    """The :class:`Detection` of a finished candidate, with its flags."""
+def to_detection(ctx: SearchContext, c: Candidate, conf: float, gray) -> Detection:
+    """The :class:`Detection` of a finished candidate (``gray``: the image
+    searched at full resolution), with its flags."""
     p = ctx.pattern
     pose = c.full.pose
     x, y, s, a = pose.tx, pose.ty, pose.scale, pose.angle
@@ -566,7 +578,7 @@ def to_detection(ctx: SearchContext, c: Candidate, conf: float, shape) -> Detect
     if p.is_line:
         # any point of the line is as good: report the one nearest the centre
         kind = "line"
-        la, lo, x, y = line_parameters(x, y, a, shape)
+        la, lo, x, y = line_parameters(x, y, a, gray.shape)
     m = pose_to_matrix(x, y, s, a, p.origin)
     outline = [apply_matrix(m, o) for o in p.outline]
     flags = []
@@ -580,5 +592,9 @@ def to_detection(ctx: SearchContext, c: Candidate, conf: float, shape) -> Detect
         flags.append(FLAG_OUTSIDE_RANGE)
     elif ctx.compare.at_range_edge(s, a):
         flags.append(FLAG_RANGE_EDGE)
-    return Detection(float(x), float(y), float(s), float(a), float(c.full.score), conf,
-                     m, outline, c.votes, kind, la, lo, tuple(flags), c.evidence.nfa)
+    det = Detection(float(x), float(y), float(s), float(a), float(c.full.score), conf,
+                    m, outline, c.votes, kind, la, lo, tuple(flags), c.evidence.nfa)
+    if p.is_line:   # (in a colour search's BGR image, its grey copy's)
+        det.segment = visible_segment(gray if gray.ndim == 2 else cv2.cvtColor(
+            np.ascontiguousarray(gray), cv2.COLOR_BGR2GRAY), det, ctx.config.min_gradient)
+    return det

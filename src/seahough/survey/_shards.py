@@ -57,8 +57,8 @@ __all__ = ["SurveyFolder", "IMAGES_SCHEMA", "DETECTIONS_SCHEMA", "image_row", "F
 #: without either and is not continued; 3: detections get ``pattern``, the
 #: name of the pattern of a Detector of several; 4: images get ``left_out``
 #: and the best candidate not reported, ``best_score``, ``best_nfa``,
-#: ``declined``).
-FORMAT = 4
+#: ``declined``; 5: detections get ``segment``, a line's visible extent).
+FORMAT = 5
 MANIFEST = "survey.json"
 IMAGES = "images.parquet"
 DETECTIONS = "detections.parquet"
@@ -95,6 +95,7 @@ DETECTIONS_SCHEMA = pa.schema([
     ("line_offset", pa.float64()),
     ("flags", pa.list_(pa.string())),
     ("pattern", pa.string()),       # the pattern's name ("" for a Detector of one pattern)
+    ("segment", pa.list_(pa.float64(), 4)),  # a line's visible extent: x0 y0 x1 y1 (else null)
 ])
 
 

@@ -243,7 +243,8 @@ def search_batch(batch: list, detector: Detector) -> tuple[list, list]:
             nfa = float(d.nfa) if math.isfinite(d.nfa) else None
             dets.append((index, None, rank, d.x, d.y, d.scale, d.angle, d.score, d.confidence,
                          nfa, m, float(d.votes), d.kind, d.line_angle, d.line_offset,
-                         list(d.flags), d.pattern))
+                         list(d.flags), d.pattern,
+                         None if d.segment is None else [float(v) for v in d.segment.ravel()]))
     return rows, dets
 
 

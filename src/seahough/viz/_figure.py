@@ -29,6 +29,7 @@ from matplotlib import patheffects
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from ..core.lines import _BAND_TOL, _line_ends, _line_extent  # noqa: F401  (their home was here)
 from ..core.ranking import FLAG_ALONG_LINE
 from ..errors import ParameterError, WriteError
 from ..geometry import format_angle, format_line
@@ -254,100 +255,6 @@ def _show(ax, disp: np.ndarray, colour: bool, box_wh=None) -> None:
     ax.set_xlim(-0.5, w - 0.5)
     ax.set_ylim(h - 0.5, -0.5)
     ax.set_autoscale_on(False)
-
-
-def _line_ends(x, y, angle_deg, w, h):
-    """The two ends of the line through (x, y) at ``angle_deg`` (counter-
-    clockwise as displayed) clipped to the image, or None when it misses."""
-    t = math.radians(angle_deg)
-    d = np.array([math.cos(t), -math.sin(t)])
-    L = 2.0 * math.hypot(w, h) + abs(x) + abs(y)
-    p1 = (int(round((x - L * d[0]) * 64)), int(round((y - L * d[1]) * 64)))
-    p2 = (int(round((x + L * d[0]) * 64)), int(round((y + L * d[1]) * 64)))
-    ok, a, b = cv2.clipLine((0, 0, int(w * 64), int(h * 64)), p1, p2)
-    if not ok:
-        return None
-    return (a[0] / 64 - 0.5, a[1] / 64 - 0.5), (b[0] / 64 - 0.5, b[1] / 64 - 0.5)
-
-
-#: Where a line detection's visible extent is looked for: its borders'
-#: edges within this many px across, their gradient within 25 degrees of
-#: the line's normal (tan 25 = 0.47), and gaps along it of at most this
-#: share of the image's diagonal.
-_BAND_TOL = 1.5
-_ACROSS_RATIO = 1.0 / math.tan(math.radians(25.0))
-_MAX_GAP = 0.05
-
-
-def _line_extent(gray: np.ndarray, d, half: float, min_gradient: float):
-    """``(t0, t1)``: the visible extent of line detection ``d`` along its
-    direction, px from ``(d.x, d.y)``, or None when none is found.
-
-    The grey image is sampled in a strip along the line (1 px along, 0.5 px
-    across); a place along it holds the object when both of its borders
-    (``half`` px each side of the centre line, within 1.5 px) have an edge
-    there: a gradient across the line of at least ``min_gradient`` (Scharr
-    units: 32 per grey level per px), within 25 degrees of the normal, of
-    the sign most of that border's edges have (a bright rope has opposite
-    signs on its two sides). The longest run of such places without gaps
-    over 5 % of the image's diagonal gives the ends; one shorter than a
-    tenth of the line's length in the image does not count.
-
-    Examples
-    --------
-    >>> import types
-    >>> img = np.full((100, 200), 40, np.float32)
-    >>> img[48:53, 30:120] = 220                         # a rope 5 px wide, x 30-119
-    >>> d = types.SimpleNamespace(x=99.5, y=50.0, line_angle=0.0)
-    >>> [round(float(v)) for v in _line_extent(img, d, 2.5, 48.0)]
-    [-70, 20]
-    """
-    h, w = gray.shape
-    ends = _line_ends(d.x, d.y, d.line_angle, w, h)
-    if ends is None:
-        return None
-    a = math.radians(d.line_angle)
-    dx, dy = math.cos(a), -math.sin(a)
-    nx, ny = math.sin(a), math.cos(a)
-    ts = sorted((e[0] - d.x) * dx + (e[1] - d.y) * dy for e in ends)
-    t = np.arange(math.floor(ts[0]), math.ceil(ts[1]) + 1, dtype=np.float32)
-    reach = half + _BAND_TOL + 1.0
-    s = np.arange(-reach, reach + 0.25, 0.5, dtype=np.float32)
-    mx = (d.x + t[None, :] * dx + s[:, None] * nx).astype(np.float32)
-    my = (d.y + t[None, :] * dy + s[:, None] * ny).astype(np.float32)
-    strip = cv2.remap(np.ascontiguousarray(gray, np.float32), mx, my, cv2.INTER_LINEAR,
-                      borderMode=cv2.BORDER_REPLICATE)
-    strip = cv2.blur(strip, (3, 1))                   # strands, noise: 3 px along
-    g_s = np.zeros_like(strip)                        # grey levels per px, across
-    g_s[1:-1] = strip[2:] - strip[:-2]                # (rows 0.5 px apart)
-    g_t = np.zeros_like(strip)                        # and along
-    g_t[:, 1:-1] = 0.5 * (strip[:, 2:] - strip[:, :-2])
-    thr = min_gradient / 32.0
-    hit = np.ones(t.size, bool)
-    for side in (-half, half):
-        rows = np.flatnonzero(np.abs(s - side) <= _BAND_TOL)
-        rows = rows[(rows > 0) & (rows < s.size - 1)]
-        if rows.size == 0:
-            return None
-        gs, gt = g_s[rows], g_t[rows]
-        best = np.abs(gs).argmax(axis=0)
-        col = np.arange(t.size)
-        gs, gt = gs[best, col], gt[best, col]
-        edge = (np.abs(gs) >= thr) & (np.abs(gs) >= _ACROSS_RATIO * np.abs(gt))
-        if not edge.any():
-            return None
-        sign = 1.0 if (gs[edge] > 0).sum() >= (gs[edge] < 0).sum() else -1.0
-        hit &= edge & (gs * sign > 0)
-    idx = np.flatnonzero(hit)
-    if idx.size == 0:
-        return None
-    cuts = np.flatnonzero(np.diff(t[idx]) > _MAX_GAP * math.hypot(w, h))
-    starts, stops = np.r_[0, cuts + 1], np.r_[cuts, idx.size - 1]
-    k = int(np.argmax(t[idx[stops]] - t[idx[starts]]))
-    t0, t1 = float(t[idx[starts[k]]]), float(t[idx[stops[k]]])
-    if t1 - t0 < 0.1 * (ts[1] - ts[0]):
-        return None
-    return t0, t1
 
 
 def _det_label(d) -> str:

@@ -128,8 +128,10 @@ def _draw_line(ax, d, colour, gray, w, h):
         half = 0.5 * abs(float(np.dot(borders[0] - borders[1], nv)))
     else:
         half = 0.0
-    ext = _line_extent(gray, d, half, Config().min_gradient) if half >= 1.0 else None
-    if ext is None:
+    seg = getattr(d, "segment", None)   # (the search's: reported in its records too)
+    ext = None if seg is not None or half < 1.0 else _line_extent(gray, d, half,
+                                                                   Config().min_gradient)
+    if seg is None and ext is None:
         # the rope's borders (the centre line without them) across the image
         for bx, by in borders or [np.array([d.x, d.y])]:
             e = _line_ends(bx, by, d.line_angle, w, h)
@@ -138,7 +140,8 @@ def _draw_line(ax, d, colour, gray, w, h):
                         path_effects=_OUTLINE)
         return None
     p = np.array([d.x, d.y])
-    ends = np.array([p + ext[0] * dv, p + ext[1] * dv])
+    ends = np.asarray(seg, float) if seg is not None else np.array([p + ext[0] * dv,
+                                                                     p + ext[1] * dv])
     band = np.array([ends[0] - half * nv, ends[1] - half * nv, ends[1] + half * nv,
                      ends[0] + half * nv, ends[0] - half * nv])
     ax.plot(band[:, 0], band[:, 1], color=colour, lw=1.8, path_effects=_OUTLINE)
