@@ -204,6 +204,24 @@ def test_a_detections_label_on_the_picture_has_its_nfa_and_flags():
     assert _det_label(line).endswith("px · nfa 1e-20"), _det_label(line)   # (a line's own flag left out)
 
 
+@pytest.mark.parametrize("x", [8.0, 55.0, 81.0, 104.0])
+def test_a_detections_label_beside_it_stays_inside_the_image(x):
+    """A sonar user's overlay of a 111x97 crop: the label of a detection at
+    x 81 ran off the image's right edge ("... outside_search_ra")."""
+    img = np.random.default_rng(0).uniform(40, 200, (97, 111)).astype(np.uint8)
+    t = np.linspace(0, 2 * np.pi, 40)
+    d = seahough.Detection(x, 50.0, 0.45, 337.6, 0.92, 0.79, np.eye(2, 3), nfa=2.5e-7,
+                           outline=[np.c_[x + 6 * np.cos(t), 50 + 3 * np.sin(t)]],
+                           flags=("outside_search_range",))
+    fig = plot.plot_detections(img, [d])
+    fig.canvas.draw()
+    ax, r = fig.axes[0], fig.canvas.get_renderer()
+    labels = [t for t in ax.texts if "outside_search_range" in t.get_text()]
+    assert len(labels) == 1
+    bb, box = labels[0].get_window_extent(r), ax.get_window_extent(r)
+    assert box.x0 - 1 <= bb.x0 and bb.x1 <= box.x1 + 1, (bb, box)
+
+
 def test_det_label_wraps_rounded_angles():
     obj = types.SimpleNamespace(kind="object", score=0.9, confidence=0.8, scale=1.0,
                                 angle=359.98)

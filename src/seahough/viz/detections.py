@@ -13,9 +13,10 @@ from matplotlib.figure import Figure
 from matplotlib.offsetbox import AnchoredOffsetbox, TextArea, VPacker
 
 from ..config import Config
+from ..core.lines import visible_segment
 from ..errors import ParameterError
 from ._figure import COLOURS, DPI, _OUTLINE, _TEXT_OUTLINE, _as_display, _det_label, _figure, \
-    _finish, _items, _line_ends, _line_extent, _set_title, _show, _text_size
+    _finish, _items, _line_ends, _set_title, _show, _text_size
 from ._inset import _pattern_beside, _pattern_inset
 
 _IMAGE_BOX = 900        # longer side of an image drawn by plot_detections, px
@@ -117,21 +118,18 @@ def detections_size(shape, *, max_width=None) -> tuple[int, int]:
 
 def _draw_line(ax, d, colour, gray, w, h):
     """Draw line detection ``d``: the segment along the object (its visible
-    extent, :func:`_line_extent`) as its two borders closed at the ends, and
-    return its ends ``[[x0, y0], [x1, y1]]``; or, when no extent is found,
-    its two borders across the whole image (None)."""
+    extent, its ``segment`` or :func:`~.core.lines.visible_segment`) as its
+    two borders closed at the ends, and return its ends ``[[x0, y0], [x1,
+    y1]]``; or, when no extent is found, its borders across the image (None)."""
     borders = [np.asarray(o, float).reshape(-1, 2) for o in d.outline]
     borders = [o[0] for o in borders if len(o) >= 2]
     a = math.radians(d.line_angle)
-    dv, nv = np.array([math.cos(a), -math.sin(a)]), np.array([math.sin(a), math.cos(a)])
-    if len(borders) >= 2:
-        half = 0.5 * abs(float(np.dot(borders[0] - borders[1], nv)))
-    else:
-        half = 0.0
+    nv = np.array([math.sin(a), math.cos(a)])
+    half = 0.5 * abs(float(np.dot(borders[0] - borders[1], nv))) if len(borders) >= 2 else 0.0
     seg = getattr(d, "segment", None)   # (the search's: reported in its records too)
-    ext = None if seg is not None or half < 1.0 else _line_extent(gray, d, half,
-                                                                   Config().min_gradient)
-    if seg is None and ext is None:
+    if seg is None and gray is not None:
+        seg = visible_segment(gray, d, Config().min_gradient)
+    if seg is None:
         # the rope's borders (the centre line without them) across the image
         for bx, by in borders or [np.array([d.x, d.y])]:
             e = _line_ends(bx, by, d.line_angle, w, h)
@@ -139,9 +137,7 @@ def _draw_line(ax, d, colour, gray, w, h):
                 ax.plot([e[0][0], e[1][0]], [e[0][1], e[1][1]], color=colour, lw=1.8,
                         path_effects=_OUTLINE)
         return None
-    p = np.array([d.x, d.y])
-    ends = np.asarray(seg, float) if seg is not None else np.array([p + ext[0] * dv,
-                                                                     p + ext[1] * dv])
+    ends = np.asarray(seg, float)
     band = np.array([ends[0] - half * nv, ends[1] - half * nv, ends[1] + half * nv,
                      ends[0] + half * nv, ends[0] - half * nv])
     ax.plot(band[:, 0], band[:, 1], color=colour, lw=1.8, path_effects=_OUTLINE)
@@ -159,13 +155,14 @@ def _nearest_on(seg, x, y) -> tuple[float, float]:
 
 def _place_label(ax, text, x, y, colour, w, h):
     """A boxed label just above (x, y), or below it near the image's top
-    edge, kept inside the image."""
-    ha = "left" if x < 0.25 * w else ("right" if x > 0.75 * w else "center")
+    edge, centred on x and moved in from a side it would reach past (a sonar
+    crop's label ran off its right edge)."""
     dy = 10 if y < 0.08 * h else -10
     va = "bottom" if dy < 0 else "top"
-    xs = float(np.clip(x, 0.02 * w, 0.98 * w))
+    half = 0.5 * (_text_size(ax.figure, text, **_LIST_TEXT)[0] + _LIST_PAD) * w / ax.bbox.width
+    xs = float(np.clip(x, min(half, 0.5 * w), max(w - half, 0.5 * w)) - 0.5)
     ys = float(np.clip(y, 0.02 * h, 0.98 * h))
-    ax.annotate(text, (xs, ys), xytext=(0, -dy), textcoords="offset points", ha=ha, va=va,
+    ax.annotate(text, (xs, ys), xytext=(0, -dy), textcoords="offset points", ha="center", va=va,
                 color=colour, fontsize=10, fontweight="bold", annotation_clip=False,
                 bbox=dict(boxstyle="round,pad=0.25", fc="black", ec=colour, alpha=0.72, lw=1))
 
