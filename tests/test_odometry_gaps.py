@@ -200,6 +200,11 @@ def test_the_trajectory_picture_marks_assumed_poses(tmp_path):
     line = next(ln for ln in fig.axes[0].get_lines() if ln.get_label() == "pose assumed (1)")
     assert line.get_markerfacecolor() == "none"      # (hollow: the start shows through)
     assert (line.get_xdata()[0], line.get_ydata()[0]) == (res.rows[6]["x"], res.rows[6]["y"])
+    # the title splits its flagged frames as the legend does (a video analyst read "2
+    # flagged" over "flagged (1)" and "pose assumed (1)")
+    n = sum(1 for r in res.rows if r["flags"])
+    title = fig.axes[0].get_title()
+    assert title.endswith(f"{n} flagged (1 pose assumed)"), (title, n)
 
 
 # ---------------------------------------------------------------- the wide last try

@@ -194,8 +194,11 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
     ax.set_xlabel(f"x ({unit})")
     ax.set_ylabel(f"y ({unit}, down as in the first frame)")
     if title is None:
+        # (split as the legend is: its "flagged (1)" beside a title's "2 flagged" read wrong)
+        parts = [f"{n} {what}" for n, what in ((int((flagged & guessed).sum()), "pose assumed"),
+                                               (int((flagged & ~ok).sum()), "no pose")) if n]
         title = (f"dead-reckoned path: {len(rows)} frames, {dist:.1f} {unit} measured, "
-                 f"{int(flagged.sum())} flagged")
+                 f"{int(flagged.sum())} flagged" + (f" ({', '.join(parts)})" if parts else ""))
     ax.set_title(title, fontsize=12)
     if ok.any():
         ax.legend(loc="best", fontsize=9, framealpha=0.85)
