@@ -370,3 +370,28 @@ def test_a_warning_from_the_prompt_or_python_c_is_no_crash():
         r = subprocess.run(args, input=stdin, capture_output=True, text=True, timeout=300)
         assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr[-2000:]
         assert "BitDepthWarning" in r.stderr, r.stderr[-2000:]
+
+
+def test_a_numpy_file_is_an_image_and_a_video_is_said_to_be_one(tmp_path):
+    """A sonar analyst's trial: a float tile saved with np.save was "not an
+    image OpenCV can decode", and so was a whole video given to
+    Detector.detect (read whole first: a dive's video is gigabytes)."""
+    tile = (_scene().astype(np.float32) / 255.0)
+    np.save(tmp_path / "tile.npy", tile)
+    assert np.array_equal(seahough.read_image(tmp_path / "tile.npy"), tile)
+    np.save(tmp_path / "one.npy", tile[:, :, None])                  # HxWx1: grey
+    assert seahough.read_image(tmp_path / "one.npy").shape == tile.shape
+    box = seahough.Pattern.rectangle(60, 40)
+    assert seahough.Detector(box).detect(str(tmp_path / "tile.npy"))
+    np.save(tmp_path / "cube.npy", np.zeros((3, 4, 5, 6)))
+    with pytest.raises(ImageReadError, match=r"cube.npy: a NumPy array of shape \(3, 4, 5, 6\)"):
+        seahough.read_image(tmp_path / "cube.npy")
+    with pytest.raises(seahough.ImageSizeError, match="over the limit of 100"):
+        seahough.read_image(tmp_path / "tile.npy", max_pixels=100)
+    (tmp_path / "text.npy").write_text("not numpy")
+    with pytest.raises(ImageReadError, match="text.npy: not a NumPy array file"):
+        seahough.read_image(tmp_path / "text.npy")
+    (tmp_path / "dive.mp4").write_bytes(b"\0" * 64)
+    with pytest.raises(ImageReadError, match=r"dive.mp4: a video, not an image: one of its "
+                       r"frames is .*dive.mp4#12 \(from 0\); all of them: seahough.iter_frames"):
+        seahough.Detector(box).detect(str(tmp_path / "dive.mp4"))

@@ -316,6 +316,17 @@ def test_the_black_beyond_a_sonar_fan_is_no_data():
     assert no_data(canvas) is None
     cv2.rectangle(canvas, (0, 100), (150, 239), 150, -1)
     assert no_data(canvas) is None
+    # a black cable or a shadow running off the edge is scene (a reviewer saw the cable
+    # filled, and no longer found); a photo turned on a black canvas has no data beyond it
+    img = cv2.GaussianBlur(np.random.default_rng(0).uniform(60, 200, (240, 320)).astype(
+        np.float32), (0, 0), 1)
+    cable, shadow = img.copy(), img.copy()
+    cv2.line(cable, (0, 60), (319, 180), 0, 12)
+    shadow[100:140, 200:320] = 0
+    assert no_data(cable) is None and no_data(shadow) is None
+    assert seahough.Detector(seahough.Pattern.line(150, 12), max_results=2).detect(cable)
+    turned = cv2.warpAffine(img, cv2.getRotationMatrix2D((160, 120), 25, 0.8), (320, 240))
+    assert 0.3 < no_data(turned).mean() < 0.45
     # the dark water in the amphora wreck's corner fades into the picture: kept
     photo = cv2.imread(str(data_path("sequences/aqualoc_amphorae_wreck/frame_060.png")), 0)
     assert no_data(photo.astype(np.float32)) is None

@@ -364,6 +364,11 @@ NO_DATA_STEP = 0.75
 #: are (:func:`seahough.io.hidden.fill_hidden`).
 NO_DATA_TEXTURE = 0.5
 NO_DATA_GROW = 3
+#: ... and it lies along the image's edge for at least this share of its
+#: border with the picture (what lies beyond a picture: a fan's outside
+#: 1.0, a turned photo's black corners over 1; a black cable or a shadow
+#: running off the edge, which a reviewer saw filled: 0.03 and 0.14).
+NO_DATA_CONTACT = 0.5
 
 
 def no_data(gray: np.ndarray, border=None) -> np.ndarray | None:
@@ -393,9 +398,13 @@ def no_data(gray: np.ndarray, border=None) -> np.ndarray | None:
     sd = np.sqrt(np.maximum(cv2.blur(p * p, (5, 5)) - m * m, 0.0))
     dark = ((p <= NO_DATA_LEVEL) & (sd < BLANK_STD)).astype(np.uint8)
     n, lab, stats, _ = cv2.connectedComponentsWithStats(dark, connectivity=4)
-    edge = np.unique(np.concatenate([lab[0], lab[-1], lab[:, 0], lab[:, -1]]))
-    keep = np.zeros(n, bool)
-    keep[edge[stats[edge, cv2.CC_STAT_AREA] >= NO_DATA_SHARE[0] * h * w]] = True
+    contact = np.bincount(np.concatenate([lab[0], lab[-1], lab[:, 0], lab[:, -1]]), minlength=n)
+    rim = (dark > 0) & (cv2.erode(dark, np.ones((3, 3), np.uint8),
+                                  borderType=cv2.BORDER_REPLICATE) == 0)
+    rim[[0, -1], :] = False
+    rim[:, [0, -1]] = False
+    keep = (stats[:, cv2.CC_STAT_AREA] >= NO_DATA_SHARE[0] * h * w) & (contact > 0) & (
+        contact >= NO_DATA_CONTACT * np.bincount(lab[rim], minlength=n))
     keep[0] = False
     mask = keep[lab]
     if not mask.any() or mask.mean() > NO_DATA_SHARE[1]:

@@ -173,7 +173,8 @@ def read_image(path: str | os.PathLike, *, max_pixels: int = 200_000_000,
         video after a JPEG, a camera's trailer) are ignored. Also a video's
         frame as :func:`~seahough.list_frames` names it, ``"dive.mp4#12"``
         (decoded from the video's start: :func:`~seahough.iter_frames`
-        reads them all in order).
+        reads them all in order); or a NumPy ``.npy`` file of an image's
+        array (a float sonar tile: its levels as :func:`to_gray` reads them).
     max_pixels : int
         Files whose header claims more pixels are refused before decoding.
     max_memory_mb : float
@@ -224,6 +225,12 @@ def read_image(path: str | os.PathLike, *, max_pixels: int = 200_000_000,
         raise ImageReadError(video_ref_problem(str(path)) or f"{p}: no such file")
     if p.is_dir():
         raise ImageReadError(f"{p}: is a folder, not an image")
+    if p.suffix.lower() == ".npy":
+        return _read_npy(p, max_pixels)
+    from .frames import VIDEO_EXTENSIONS
+    if p.suffix.lower() in VIDEO_EXTENSIONS:   # (not read whole: a dive's video is gigabytes)
+        raise ImageReadError(f"{p}: a video, not an image: one of its frames is {p}#12 (from "
+                             "0); all of them: seahough.iter_frames, or list it among frames")
     try:
         data = p.read_bytes()
     except OSError as e:
@@ -272,6 +279,23 @@ def _opencv_turns_tiff() -> bool:
         img = _opencv_decode(buf.getvalue())
         _tiff_turned.append(img is not None and int(img[0, 0]) == 255)
     return _tiff_turned[0]
+
+
+def _read_npy(p: Path, max_pixels: int) -> np.ndarray:
+    """A NumPy ``.npy`` file's array as an image (HxW, HxWx3 or HxWx4; its
+    levels are read as :func:`to_gray` reads an array's): a sonar's float
+    backscatter saved by a script. Its shape is checked before it is read."""
+    try:
+        a = np.load(p, mmap_mode="r", allow_pickle=False)
+    except (OSError, ValueError) as e:
+        raise ImageReadError(f"{p}: not a NumPy array file ({e})") from None
+    if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[2] not in (1, 3, 4)):
+        raise ImageReadError(f"{p}: a NumPy array of shape {a.shape}, not an image (HxW, "
+                             "HxWx3 or HxWx4)")
+    if a.shape[0] * a.shape[1] > max_pixels:
+        raise ImageSizeError(f"{p}: {a.shape[1]}x{a.shape[0]} pixels is over the limit of "
+                             f"{max_pixels}")
+    return np.array(a[:, :, 0] if a.ndim == 3 and a.shape[2] == 1 else a)
 
 
 def to_gray(image, *, name: str = "image", max_pixels: int = 200_000_000,
