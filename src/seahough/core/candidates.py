@@ -430,7 +430,8 @@ def icp_subset(pf: PatternFeatures, k: int, frame: bool = False) -> np.ndarray:
 
 def find_candidates(ctx: SearchContext, votes: Votes) -> list:
     """Refine the accumulator's most promising cells into distinct candidate
-    poses at the working scale, best first (at most ``ctx.n_candidates``)."""
+    poses at the working scale, best first (at most ``ctx.n_candidates``; when
+    counting, every seed's)."""
     cfg, p, bins, pf, feats = ctx.config, ctx.pattern, ctx.bins, ctx.pf, ctx.features
     tune = cfg.search
     cmp = ctx.compare
@@ -466,8 +467,8 @@ def find_candidates(ctx: SearchContext, votes: Votes) -> list:
     # texture, there to measure the runner-up: one that fits far worse than
     # the best so far after its first short ICP is scored there (tune.screen)
     screen = p.is_frame and not known
-    # counting: every seed is refined and the best kept (the seeds of a
-    # weak object come late, after the clutter's have taken the places)
+    # counting: every seed is refined and kept (the seeds of a weak object
+    # come late, after the clutter's have taken the places; ranking judges them)
     for rank, sd in enumerate(todo):
         if len(out) >= ctx.n_candidates and not ctx.counting:
             break

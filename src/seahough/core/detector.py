@@ -71,18 +71,18 @@ class SearchResult:
     (:class:`~.candidates.Candidate`: ``pose``, ``score``, ``nfa``), in the
     order of their working-scale score (the coarse one: the full-resolution
     finish, which ranks the detections, may order them otherwise), at most
-    ``Config.n_candidates`` (7; ``max_results + 2`` when more) per pattern; one not reported
-    says why in its ``declined`` (e.g. "NFA 1.08 over max_nfa 1", or a
-    disc's pose for a ring: "its hole is not in the image"). An object in
-    view that is no candidate at all had too few votes: more candidates
-    (``Config(n_candidates=30)``) may bring it in. For a Detector of several
-    patterns, ``parts`` holds each pattern's own result by name (``planes``
+    ``Config.n_candidates`` (7; ``max_results + 2`` when more; over 5 results,
+    every seed's) per pattern; one not reported says why in its ``declined``
+    (e.g. "NFA 1.08 over max_nfa 1", or a disc's pose for a ring: "its hole
+    is not in the image"). An object in view that is no candidate at all had
+    too few votes (``Config(n_candidates=30)`` may bring it in). For a
+    Detector of several patterns, ``parts`` holds each pattern's own result by name (``planes``
     and ``features`` are then those of the best detection's pattern, or of
     the first pattern when none is found; ``planes.pattern`` names it).
     ``blanks`` is what was filled in the image before the search
-    (:class:`~.blanks.Blanks`: its letterbox border, burned-in captions,
-    the regions of ``Config.ignore``); None when it was searched as given
-    (features given, a frame pattern).
+    (:class:`~.blanks.Blanks`: its letterbox border, burned-in captions, the
+    regions of ``Config.ignore``, no data beyond the picture); None when it
+    was searched as given (features given, a frame pattern).
     """
 
     detections: list

@@ -411,9 +411,8 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
     """
     cmp = ctx.compare
     best = max((c.work_score for c in cands), default=0.0)
-    # only those that could win; counting (many results asked for), every one
-    # that could pass min_score: a half-buried object is not judged against a
-    # clean one elsewhere in the image
+    # only those that could win; counting (many results asked for), every one that could
+    # pass min_score: a half-buried object is not judged against a clean one elsewhere
     share = 0.0 if ctx.counting else 0.6
     pre = max(0.85 * ctx.min_score, share * best)
     todo = [c for c in cands if c.work_score >= pre]
@@ -429,8 +428,10 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
                      else "0.6 x the best candidate's")
             c.declined = (f"score {c.work_score:.3g} (coarse, before the full-resolution "
                           f"finish) under {pre:.3g} ({bound}), the least that could win")
-        elif not any(c is t for t in todo):
-            c.declined = (f"score {c.work_score:.3g} (coarse): {ctx.max_results + 2} "
+        elif not any(c is t for t in todo):   # (counting: judged; chance's are cut first)
+            c.declined = (f"NFA {c.evidence.nfa:.3g} over max_nfa {ctx.max_nfa:.3g} (coarse)"
+                          if c.evidence is not None and c.evidence.nfa > ctx.max_nfa else
+                          f"score {c.work_score:.3g} (coarse): {ctx.max_results + 2} "
                           "better ones were finished (max_results + 2)")
     turns = () if ctx.angle_known else ctx.pattern.near_turns(ctx.config)
     alts = [_alternatives(ctx, c, turns) for c in todo]
@@ -482,8 +483,10 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
         same = lambda c, a: cmp.same(c.fit.pose, a.fit.pose, ctx.factor)
     else:
         same = lambda c, a: cmp.close(c.fit.pose, a.fit.pose) or cmp.equivalent(c.fit.pose, a.fit.pose)
-    others = [c.work_score for c in cands
-              if not any(c is a or same(c, a) for a in accepted + other_object)]
+    # (counting, one chance explains is no rival: speckle made sonar rubble all ambiguous)
+    chance = lambda c: ctx.counting and c.evidence is not None and c.evidence.nfa > ctx.max_nfa
+    others = [c.work_score for c in cands if not chance(c)
+              and not any(c is a or same(c, a) for a in accepted + other_object)]
     runner_up = max(others, default=0.0)
     dets = []
     for c in accepted:
@@ -506,11 +509,8 @@ def _copy_of(ctx: SearchContext, c: Candidate, twin: Candidate) -> bool:
     third of the frame (a tiled floor's tile one period off is a rival), nor
     a pose turned further (the turn of a square is the ambiguity to see)."""
     p = ctx.pattern
-    if p.is_frame:
-        return False
-    if p.kind in ("circle", "ring"):
-        return True
-    return abs(angle_difference(c.full.pose.angle, twin.full.pose.angle)) < 10.0
+    return not p.is_frame and (p.kind in ("circle", "ring") or abs(
+        angle_difference(c.full.pose.angle, twin.full.pose.angle)) < 10.0)
 
 
 def judge(ctx: SearchContext, c: Candidate) -> None:
