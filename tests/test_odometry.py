@@ -462,6 +462,11 @@ def test_video_file_and_grey_16bit_frames(tmp_path):
     # one time line: the second video's frames come after the first's 8 (at 5 fps), not
     # at 0 again (a user's velocities from the time column were wrong)
     assert [r["time"] for r in two.rows] == pytest.approx([0.2 * i for i in range(11)])
+    # each video as long as its frame count, whichever of its frames are listed; a video
+    # listed again comes after the one before it (a reviewer's finds)
+    from seahough.io.frames import FrameReader
+    r = FrameReader([f"{video}#0", f"{video}#2", f"{video2}#1", f"{video}#1"], 10 ** 7)
+    assert [r.time(i) for i in range(4)] == pytest.approx([0.0, 0.4, 1.6 + 0.2, 2.2 + 0.2])
     bad = tmp_path / "broken.avi"
     bad.write_bytes(b"not a video")
     with pytest.raises(seahough.ParameterError, match="broken.avi: (cannot open|.*no frame)"):

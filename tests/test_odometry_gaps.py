@@ -278,7 +278,7 @@ def test_a_run_of_an_earlier_format_is_not_continued(tmp_path):
     rec["settings"]["format"] = 1
     (out / "run.json").write_text(json.dumps(rec))
     before = (out / "odometry.csv").read_bytes()
-    with pytest.raises(ParameterError, match=r"earlier seahough \(run format 1, now 2.*zero "
+    with pytest.raises(ParameterError, match=r"earlier seahough \(run format 1, now 3.*zero "
                                              r"motion.*without --resume") as e:
         run_odometry(paths, out, resume=True, progress=False, mosaic=False)
     assert "\n" not in str(e.value)
@@ -348,7 +348,7 @@ def test_a_survey_folder_of_an_earlier_format_is_refused_not_spliced(tmp_path):
     with RunFolder(tmp_path / "s") as run:
         run.write_settings(old, settings_hash(old))
         with pytest.raises(ParameterError, match=r"holds a survey that was made by an earlier "
-                                                 r"seahough \(run format 1, now 2.*another --out"):
+                                                 r"seahough \(run format 1, now 3.*another --out"):
             _check_same_survey(run, settings)
         run.write_settings(settings, settings_hash(settings))
         _check_same_survey(run, settings)                          # the same survey: fine

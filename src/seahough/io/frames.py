@@ -491,31 +491,41 @@ class FrameReader:
             ref = split_video_ref(str(it))
             if ref is not None:
                 fps = self._video_fps(ref[0])
-                t = self._video_start(ref[0]) + ref[1] / fps if fps > 0 else None
+                t = self._video_start(i) + ref[1] / fps if fps > 0 else None
             else:
                 t = time_from_name(str(it))
         if t is None and self.fps:
             t = i / float(self.fps)
         return t
 
-    def _video_start(self, path: str) -> float:
-        """Seconds before the first frame of video ``path``: the length of the
-        videos listed before it (one time line over a dive's several files:
-        a second video's times started at 0 again, and a velocity from them
-        was wrong), each up to its last frame listed."""
+    def _video_start(self, i: int) -> float:
+        """Seconds before the first frame of the video frame ``i`` belongs to:
+        the length of the videos listed before it, each as long as its frame
+        count (one time line over a dive's several files: a second video's
+        times started at 0 again, and a velocity from them was wrong; a video
+        listed again starts after the one before it too)."""
         if self._starts is None:
-            last: dict = {}       # (each video's last frame listed, in the order they come)
+            self._starts, t, run, last = [], 0.0, None, -1
             for it in self.items:
                 ref = None if isinstance(it, np.ndarray) or it is None \
                     else split_video_ref(str(it))
+                if ref is not None and run is not None and ref[0] != run:   # (the next video)
+                    t += self._video_length(run, last)
                 if ref is not None:
-                    last[ref[0]] = max(last.get(ref[0], -1), ref[1])
-            self._starts, t = {}, 0.0
-            for video, k in last.items():
-                self._starts[video] = t
-                fps = self._video_fps(video)
-                t += (k + 1) / fps if fps > 0 else 0.0
-        return self._starts.get(path, 0.0)
+                    run, last = ref[0], ref[1] if ref[0] != run else max(last, ref[1])
+                self._starts.append(t)
+        return self._starts[i]
+
+    def _video_length(self, path: str, last: int) -> float:
+        """Video ``path``'s length, seconds: its frame count (at least its
+        last frame listed, ``last``, + 1) over its rate; 0 without a rate."""
+        fps = self._video_fps(path)
+        if fps <= 0:
+            return 0.0
+        cap = cv2.VideoCapture(path)
+        count = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0) if cap.isOpened() else 0
+        cap.release()
+        return max(count, last + 1) / fps
 
     def _video_fps(self, path: str) -> float:
         if path not in self._fps:

@@ -39,14 +39,17 @@ __all__ = ["RunFolder", "run_settings", "settings_hash", "settings_changes", "sa
 
 #: Bumped when the rows a run writes change for the same settings (2: a pair
 #: that cannot be measured gets a ``wide`` last try, and an assumed pose
-#: carries the last velocity on; format 1 assumed zero motion): a run of
-#: another format is not continued by ``resume``.
-SETTINGS_FORMAT = 2
+#: carries the last velocity on; format 1 assumed zero motion; 3: the frames
+#: of several videos are on one time line): a run of another format is not
+#: continued by ``resume``.
+SETTINGS_FORMAT = 3
 #: What changed in the rows at each format (for the message refusing to
 #: resume a run of an earlier one).
 FORMAT_CHANGES = {2: "frames whose motion could not be measured now get a wider last search, "
                      "and their assumed pose carries the last velocity on instead of zero "
-                     "motion"}
+                     "motion",
+                  3: "the frames of a second video are timed after the first's, not from 0 "
+                     "again"}
 LOCK_NAME = ".seahough.lock"
 OUTPUTS = ("summary.json", "mosaic.png", "trajectory.png")
 
@@ -57,7 +60,7 @@ def run_settings(scale_range, angle_range, metres_per_pixel, config, tuning) -> 
     >>> from seahough.config import ODOMETRY_CONFIG, OdometryTuning
     >>> s = run_settings((0.9, 1.1), (-20, 20), None, ODOMETRY_CONFIG, OdometryTuning())
     >>> s["scale_range"], s["angle_range"], s["metres_per_pixel"], s["format"]
-    ([0.9, 1.1], [-20.0, 20.0], None, 2)
+    ([0.9, 1.1], [-20.0, 20.0], None, 3)
     """
     cfg = config_record(config)
     tune = asdict(tuning)
