@@ -395,3 +395,12 @@ def test_a_numpy_file_is_an_image_and_a_video_is_said_to_be_one(tmp_path):
     with pytest.raises(ImageReadError, match=r"dive.mp4: a video, not an image: one of its "
                        r"frames is .*dive.mp4#12 \(from 0\); all of them: seahough.iter_frames"):
         seahough.Detector(box).detect(str(tmp_path / "dive.mp4"))
+
+
+def test_a_frame_name_with_a_digit_that_is_not_ascii_is_said_to_be_no_frame(tmp_path):
+    """'²'.isdigit() is True and int('²') fails: "dive.avi#²" raised ValueError
+    (a reviewer's find) instead of naming what is wrong."""
+    from seahough.io.frames import video_ref_problem
+
+    (tmp_path / "dive.avi").write_bytes(b"\0" * 16)
+    assert "'²' is no frame number" in video_ref_problem(f"{tmp_path / 'dive.avi'}#²")

@@ -764,6 +764,8 @@ def test_a_line_is_drawn_along_the_part_of_the_rope_the_image_shows(tmp_path, se
         # along a pipe the overlay drew over 0-72): its segment, and its box there
         seg = dets[0].segment
         assert seg is not None and seg.shape == (2, 2)
+        assert abs(seg[:, 0].min() - visible[0]) < 32 and abs(seg[:, 0].max() - visible[1]) < 32
+        # (the overlay draws the detection's own: the picture and the JSON agree)
         assert abs(seg[:, 0].min() - x0) < 4 and abs(seg[:, 0].max() - x1) < 4, (seg, x0, x1)
         rec = dets[0].to_dict()
         assert np.allclose(rec["segment"], seg, atol=1e-3)

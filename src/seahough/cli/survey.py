@@ -129,7 +129,8 @@ def detect(pattern, inputs, out, workers, scheduler, batch_size, retry_errors, a
                           of false alarms), matrix (6 numbers, 2x3
                           row-major), votes, kind, line_angle,
                           line_offset, flags, pattern (its name, for
-                          several patterns: NAME=SPEC+NAME=SPEC)
+                          several patterns: NAME=SPEC+NAME=SPEC), segment
+                          (a line's visible extent: x0 y0 x1 y1)
       survey.json         the settings, the inputs and the counts
     Results are saved in shards as they come (parts/): run the same
     command again to continue an interrupted survey (nothing is searched

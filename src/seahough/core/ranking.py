@@ -133,7 +133,8 @@ class Detection(ValueEquality):
 
     def to_dict(self) -> dict:
         """Plain-Python form for JSON; with an outline, ``box``: its bounding box
-        ``[x0, y0, x1, y1]`` in image pixels, and ``outline``: its polylines.
+        ``[x0, y0, x1, y1]`` in image pixels (a line's: its band's along its
+        ``segment``, when it has one), and ``outline``: its polylines.
 
         >>> d = Detection(1.0, 2.0, 1.0, 0.0, 0.9, 0.8, np.eye(2, 3))
         >>> sorted(d.to_dict())[:4]
@@ -483,7 +484,7 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
         same = lambda c, a: cmp.same(c.fit.pose, a.fit.pose, ctx.factor)
     else:
         same = lambda c, a: cmp.close(c.fit.pose, a.fit.pose) or cmp.equivalent(c.fit.pose, a.fit.pose)
-    # (counting, one chance explains is no rival: speckle made sonar rubble all ambiguous)
+    # (counting, one chance explains is no rival: speckle made sonar rubble ambiguous)
     chance = lambda c: ctx.counting and c.evidence is not None and c.evidence.nfa > ctx.max_nfa
     others = [c.work_score for c in cands if not chance(c)
               and not any(c is a or same(c, a) for a in accepted + other_object)]
@@ -586,8 +587,7 @@ def to_detection(ctx: SearchContext, c: Candidate, conf: float, gray) -> Detecti
         flags.append(FLAG_PARTIAL)
     if conf < 0.2:
         flags.append(FLAG_AMBIGUOUS)
-    if p.is_line:
-        flags.append(FLAG_ALONG_LINE)
+    flags += [FLAG_ALONG_LINE] if p.is_line else []
     if ctx.compare.outside_ranges(s, a):
         flags.append(FLAG_OUTSIDE_RANGE)
     elif ctx.compare.at_range_edge(s, a):

@@ -159,7 +159,7 @@ def video_ref_problem(s: str) -> str | None:
     if not sep or not _is_video(Path(video)) or not Path(video).is_file() \
             or split_video_ref(s) is not None:
         return None
-    example = str(int(frame)) if frame.isdigit() else "12"
+    example = str(int(frame)) if frame.isascii() and frame.isdigit() else "12"   # ("²")
     return (f"{s}: {frame!r} is no frame number (a video's frame is named {video}#{example}, "
             f"counted from 0; every frame: {video})")
 

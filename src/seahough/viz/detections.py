@@ -126,8 +126,10 @@ def _draw_line(ax, d, colour, gray, w, h):
     a = math.radians(d.line_angle)
     nv = np.array([math.sin(a), math.cos(a)])
     half = 0.5 * abs(float(np.dot(borders[0] - borders[1], nv))) if len(borders) >= 2 else 0.0
-    seg = getattr(d, "segment", None)   # (the search's: reported in its records too)
-    if seg is None and gray is not None:
+    # the search's, reported in its records too (looked for there, on the image
+    # searched: not again here, or the picture could show what the JSON does not)
+    seg = getattr(d, "segment", None)
+    if not hasattr(d, "segment") and gray is not None:
         seg = visible_segment(gray, d, Config().min_gradient)
     if seg is None:
         # the rope's borders (the centre line without them) across the image
