@@ -781,3 +781,20 @@ def test_a_lines_visible_extent_holds_in_noise(noise):
         assert det and det[0].segment is not None, (noise, seed)
         x0, x1 = sorted(det[0].segment[:, 0])
         assert abs(x0 - 60) < 4 and abs(x1 - 200) < 4, (noise, seed, x0, x1)
+
+
+def test_a_candidate_under_min_score_says_its_nfa_fails_too():
+    """A sonar user followed "score 0.441 under min_score 0.5 (option
+    --min-score)", lowered it, and met "NFA 154 over max_nfa 1": a candidate
+    under min_score says its NFA too when that is over max_nfa, and the hint
+    names both options."""
+    from seahough.cli._records import _option_hint
+
+    img = cv2.GaussianBlur(np.random.default_rng(0).uniform(0, 255, (200, 260)).astype(
+        np.uint8), (0, 0), 1.5)
+    res = seahough.Detector(seahough.Pattern.rectangle(40, 30), min_score=0.6).search(img)
+    under = [c for c in res.candidates if "under min_score 0.6" in c.declined]
+    assert under and res.detections == []
+    for c in under:
+        assert c.declined.endswith(f"; NFA {c.nfa:.3g} over max_nfa 1 too"), c.declined
+    assert _option_hint(under[0]) == " (options --min-score and --max-nfa)"

@@ -133,15 +133,21 @@ def _option_hint(c) -> str:
     ' (far under it: the pattern may not be in view)'
     >>> _option_hint(C(score=0.6, declined="NFA 3 over max_nfa 1", pattern="buoy"))
     ' (option --max-nfa; for buoy alone: its @max-nfa=...)'
+    >>> _option_hint(C(score=0.44, declined="score 0.44 under min_score 0.5; NFA 154 over "
+    ...                "max_nfa 1 too"))
+    ' (options --min-score and --max-nfa)'
     """
-    option = next((o for words, o in _OPTION_OF if words in c.declined), None)
+    options = [o for words, o in _OPTION_OF if words in c.declined]   # (both: "...; NFA ...")
+    option = options[0] if options else None
     bound = re.search(r"under (\d+(?:\.\d+)?(?:e[-+]?\d+)?)", c.declined)
     if option == "--min-score" and bound and c.score < 0.5 * float(bound.group(1)):
         return " (far under it: the pattern may not be in view)"
     name = getattr(c, "pattern", "")
+    said = " and ".join(options)
     if option in _OWN_OPTION and name:    # (one of several: the option sets them all)
-        return f" (option {option}; for {name} alone: its @{_OWN_OPTION[option]}=...)"
-    return f" (option {option})" if option else ""
+        own = " and ".join(f"@{_OWN_OPTION[o]}=..." for o in options if o in _OWN_OPTION)
+        return f" (option{'s' * (len(options) > 1)} {said}; for {name} alone: its {own})"
+    return f" (option{'s' * (len(options) > 1)} {said})" if option else ""
 
 
 def _best_declined_line(c) -> str:

@@ -449,15 +449,17 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
     other_object: list[Candidate] = []
     s0, s1 = ctx.scale_range
     for c in todo:
-        if c.full.score < ctx.min_score:
-            c.declined = f"score {c.full.score:.3g} under min_score {ctx.min_score:.3g}"
+        if c.full.score < ctx.min_score:   # (its NFA too when over: a user lowered one, then
+            judge(ctx, c)                  # met the other, on a sonar tile)
+            c.declined = f"score {c.full.score:.3g} under min_score {ctx.min_score:.3g}" + (
+                f"; NFA {c.nfa:.3g} over max_nfa {ctx.max_nfa:.3g} too" if c.nfa > ctx.max_nfa
+                else "")
             continue
         if not cmp.pose_ok(c.full.pose):
             q = c.full.pose
             c.declined = (f"scale {q.scale:.3g} outside {0.8 * s0:.3g}-{1.25 * s1:.3g} (the "
-                          "searched range and its slack)" if math.isfinite(q.scale)
-                          and math.isfinite(q.tx) and math.isfinite(q.ty)
-                          else "its refinement diverged (no finite pose)")
+                          "searched range and its slack)" if all(map(math.isfinite, (
+                              q.scale, q.tx, q.ty))) else "its refinement diverged (no finite pose)")
             continue
         twin = next((a for a in accepted if cmp.same(c.full.pose, a.full.pose, 1.0)), None)
         if twin is not None:
@@ -515,9 +517,8 @@ def _copy_of(ctx: SearchContext, c: Candidate, twin: Candidate) -> bool:
 
 
 def judge(ctx: SearchContext, c: Candidate) -> None:
-    """Set a candidate's a-contrario :class:`~.nfa.Evidence` (at its
-    working-scale pose), against a background model of the image around
-    it."""
+    """Set a candidate's a-contrario :class:`~.nfa.Evidence` (at its working-
+    scale pose), against a background model of the image around it."""
     pf, feats, cfg = ctx.pf, ctx.features, ctx.config
     tol = math.radians(cfg.angle_tolerance)
     radius = max(1.25, cfg.match_radius * ctx.factor)
@@ -552,8 +553,7 @@ def _unseen_hole(ctx: SearchContext, c: Candidate) -> bool:
 def search_tests(ctx: SearchContext) -> float:
     """log10 of the distinct poses the search could have answered with
     (:func:`~.nfa.log10_tests` over its accumulator's region and ranges)."""
-    pf = ctx.pf
-    b = ctx.bins
+    pf, b = ctx.pf, ctx.bins
     area = (b.nx - 1) * (b.ny - 1) * b.step * b.step
     period = 180.0 if ctx.pattern.is_line else 360.0
     span = math.hypot((b.nx - 1) * b.step, (b.ny - 1) * b.step) if ctx.pattern.is_line else None
