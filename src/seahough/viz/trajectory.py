@@ -120,7 +120,7 @@ def plot_trajectory(rows_or_result, path=None, *, unit="px", truth=None, title=N
     ...         {"x": None, "y": None, "flags": ["unreadable: empty file"]}]
     >>> fig = plot_trajectory(rows, unit="m")   # path=...: also a PNG
     >>> fig.axes[0].get_title()   # (the assumed pose's step not counted)
-    'dead-reckoned path: 5 frames, 10.0 m measured, 3 flagged'
+    'dead-reckoned path: 5 frames, 10.0 m measured, 3 flagged (1 pose assumed, 1 no pose)'
     >>> [t.get_text() for t in fig.axes[0].get_legend().get_texts()][-4:]
     ['flagged (1)', 'pose assumed (1)', "heading (the frame's up)", 'no pose, not drawn (1)']
     >>> tuple(int(v) for v in fig.get_size_inches() * fig.dpi)
