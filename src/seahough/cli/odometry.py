@@ -201,16 +201,13 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
 def _say_video_rates(frames, fps: float) -> None:
     """A note for each video whose frames keep their own rate over ``--fps``
     (a user's --fps 20 on a 5 fps video changed nothing, unsaid)."""
-    import cv2
-
-    from ..io.frames import VIDEO_EXTENSIONS
+    from ..io.frames import VIDEO_EXTENSIONS, FrameReader
 
     videos = dict.fromkeys((split_video_ref(f) or (f,))[0] for f in frames)
+    reader = FrameReader([], 1)     # (its header's rate, as the run's times take it)
     for v in videos:
         if Path(v).suffix.lower() in VIDEO_EXTENSIONS and Path(v).is_file():
-            cap = cv2.VideoCapture(v)
-            rate = float(cap.get(cv2.CAP_PROP_FPS) or 0.0) if cap.isOpened() else 0.0
-            cap.release()
+            rate = reader._video_fps(v)
             if rate > 0:
                 click.echo(f"seahough: note: --fps {fps:g} is for frames without a time: the "
                            f"frames of {printable(v)} take its own rate ({rate:g} fps)", err=True)

@@ -519,18 +519,20 @@ class FrameReader:
     def _video_length(self, path: str, last: int) -> float:
         """Video ``path``'s length, seconds: its frame count (at least its
         last frame listed, ``last``, + 1) over its rate; 0 without a rate."""
-        fps = self._video_fps(path)
-        if fps <= 0:
-            return 0.0
-        cap = cv2.VideoCapture(path)
-        count = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0) if cap.isOpened() else 0
-        cap.release()
-        return max(count, last + 1) / fps
+        fps, count = self._video_info(path)
+        return max(count, last + 1) / fps if fps > 0 else 0.0
 
     def _video_fps(self, path: str) -> float:
+        return self._video_info(path)[0]
+
+    def _video_info(self, path: str) -> tuple[float, int]:
+        """Video ``path``'s frame rate and frame count, as its header gives
+        them (0 when it does not); read once."""
         if path not in self._fps:
             cap = cv2.VideoCapture(path)
-            self._fps[path] = float(cap.get(cv2.CAP_PROP_FPS) or 0.0) if cap.isOpened() else 0.0
+            self._fps[path] = (float(cap.get(cv2.CAP_PROP_FPS) or 0.0),
+                               int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)) \
+                if cap.isOpened() else (0.0, 0)
             cap.release()
         return self._fps[path]
 
