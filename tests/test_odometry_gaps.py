@@ -370,25 +370,3 @@ def test_a_frame_measured_against_an_assumed_one_says_so(tmp_path):
     assert res.summary["after_gap"] == [6]
     assert res.summary["end_point"]["status"] == "measured"
     assert all(not r["flags"] for r in rows[7:])
-
-
-def test_a_frame_a_decoder_repaired_with_the_frame_befores_rows_is_flagged(tmp_path):
-    """A video analyst's video cut short: OpenCV decoded its last frame with 208
-    of 304 rows copied from the frame before, and the pair was measured as a
-    stop (confidence 0.77). A frame whose textured rows repeat the last
-    frame's (30 % or more) is flagged damaged and its pose assumed; bars of
-    one level that every frame shares are no evidence."""
-    frames, _ = _line()
-    frames = [f.copy() for f in frames]
-    frames[6][: 2 * H // 3] = frames[5][: 2 * H // 3]        # the top two thirds repeated
-    for f in frames:                                        # letterbox bars on all
-        f[:12] = 0
-        f[-12:] = 0
-    res = run_odometry(frames, tmp_path, progress=False, mosaic=False)
-    flags = [r["flags"] for r in res.rows]
-    assert flags[6].startswith("damaged: its rows repeat frame 5's (") and \
-        "pose_assumed" in flags[6], flags[6]
-    assert res.rows[6]["status"] == "assumed"
-    assert all(not f.startswith("damaged") for i, f in enumerate(flags) if i != 6), flags
-    from seahough.survey._odometry_chain import shift_flags
-    assert shift_flags(flags[6], 100).startswith("damaged: its rows repeat frame 105's (")

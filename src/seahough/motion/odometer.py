@@ -54,10 +54,6 @@ _IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 #: (``recover``); a longer gap costs every frame of it the searches it has
 #: (about 0.2 s more a frame at 320x240 when every frame got it).
 RECOVER_SPAN = 3
-#: A frame whose textured rows are, for at least this share of them, the very
-#: rows of the frame before is damaged (:meth:`Odometer._repeated_rows`):
-#: not measured, its pose assumed. Two real frames share no row exactly.
-PARTLY_REPEATED = 0.3
 
 
 class Odometer:
@@ -162,8 +158,7 @@ class Odometer:
             frame, 6 numbers, row-major 2x3); its evidence ``confidence,
             nfa, score, overlap``; ``flags`` ("" when the step was measured;
             the first word says why not: ``no_match``, ``low_confidence``,
-            ``little_overlap``, ``few_edges``, ``duplicate``, ``damaged``,
-            ``unreadable``;
+            ``little_overlap``, ``few_edges``, ``duplicate``, ``unreadable``;
             ``after_gap`` on a measured step); the step from the previous
             frame ``dx, dy, rotation, scale_change, pair_matrix``; how it
             was measured ``ref, method, ms``; ``status``: ``"origin"``,
@@ -255,9 +250,6 @@ class Odometer:
                 row["_cum"] = _IDENTITY.copy()
             elif self._duplicate(prep, gray):
                 _assume(row, st, f"duplicate: the same pixels as frame {st.prev}")
-            elif (share := self._repeated_rows(gray)) >= PARTLY_REPEATED:
-                _assume(row, st, f"damaged: its rows repeat frame {st.prev}'s ({share:.0%} of "
-                        "them: a decoder's repair of damaged data)")
             else:
                 _measure_frame(row, i, gray, prep.features, st, self.searcher, self.load)
             self.frames[i] = self.frames.get(i) or Frame(i, gray)
@@ -273,24 +265,6 @@ class Odometer:
                 del self.frames[k]
                 self.hashes.pop(k, None)
         return row
-
-    def _repeated_rows(self, gray) -> float:
-        """The share of the frame's textured rows (every 4th) in its longest
-        block of rows that are the very rows of the last frame with a pose: a
-        decoder that lost data copies them over (a video cut short: its last
-        frame was 208 of its 304 rows the frame before's, measured as a stop
-        at confidence 0.77). Rows of one level (bars, black) are no evidence;
-        one block, not rows here and there (a codec's skipped blocks)."""
-        last = self.frames.get(self.st.prev)
-        if last is None or last.gray.shape != gray.shape:
-            return 0.0
-        a, b = last.gray[::4], gray[::4]
-        textured = a.max(axis=1) > a.min(axis=1)
-        same = np.all(a == b, axis=1)[textured]
-        if not same.any():
-            return 0.0
-        edges = np.flatnonzero(np.diff(np.r_[0, same.astype(np.int8), 0]))
-        return float((edges[1::2] - edges[::2]).max()) / same.size
 
     def _duplicate(self, prep: Prepared, gray) -> bool:
         """The same pixels as the last frame with a pose (a camera driver

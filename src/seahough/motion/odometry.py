@@ -214,9 +214,6 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     - ``duplicate: the same pixels as frame N``: the frame is frame N over
       again (a camera driver handing the same buffer twice): not measured
       (its motion is not known), its pose assumed as below.
-    - ``damaged: its rows repeat frame N's (P% of them: ...)``: a decoder that
-      lost data copied frame N's rows over part of it (a video cut short):
-      not measured, its pose assumed as below.
     - ``no_match`` (no pose of the reference frame was found in this one),
       ``low_confidence`` (one was found, but not distinct from its
       runner-up, or matching far worse than the last frames did),

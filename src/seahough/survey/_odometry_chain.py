@@ -49,8 +49,7 @@ __all__ = ["shift_flags", "read_chunk", "Chain", "measure_across"]
 POSED = ("origin", "measured")
 _ZERO = "pose_assumed: zero motion since frame "
 _SINCE = re.compile(r"((?:pose_assumed: (?:zero motion|constant velocity) since|"
-                    r"after_gap: measured against|duplicate: the same pixels as|"
-                    r"damaged: its rows repeat) frame )(\d+)")
+                    r"after_gap: measured against|duplicate: the same pixels as) frame )(\d+)")
 _IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 _PAIR = ("dx", "dy", "rotation", "scale_change", "pair_matrix")
 _MEASURE = ("confidence", "nfa", "score", "overlap")
