@@ -388,6 +388,16 @@ def test_a_numpy_file_is_an_image_and_a_video_is_said_to_be_one(tmp_path):
         seahough.read_image(tmp_path / "cube.npy")
     with pytest.raises(seahough.ImageSizeError, match="over the limit of 100"):
         seahough.read_image(tmp_path / "tile.npy", max_pixels=100)
+    # its size before it is read (a reviewer's 3.2 GB float64 file was read whole), and
+    # an .npz archive so named is no array (it raised AttributeError)
+    np.save(tmp_path / "big.npy", np.zeros((1000, 1000, 4)))
+    with pytest.raises(seahough.ImageSizeError, match=r"big.npy: a \(1000, 1000, 4\) float64 "
+                       r"array needs about \d+ MB to read and search, over the memory limit of 10 MB"):
+        seahough.read_image(tmp_path / "big.npy", max_memory_mb=10)
+    np.savez(tmp_path / "two.npz", a=tile, b=tile)
+    (tmp_path / "two.npz").rename(tmp_path / "two.npy")
+    with pytest.raises(ImageReadError, match=r"two.npy: a NumPy archive of several arrays"):
+        seahough.read_image(tmp_path / "two.npy")
     (tmp_path / "text.npy").write_text("not numpy")
     with pytest.raises(ImageReadError, match="text.npy: not a NumPy array file"):
         seahough.read_image(tmp_path / "text.npy")

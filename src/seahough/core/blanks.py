@@ -367,8 +367,9 @@ NO_DATA_GROW = 3
 #: ... and it lies along the image's edge for at least this share of its
 #: border with the picture (what lies beyond a picture: a fan's outside
 #: 1.0, a turned photo's black corners over 1; a black cable or a shadow
-#: running off the edge, which a reviewer saw filled: 0.03 and 0.14).
-NO_DATA_CONTACT = 0.5
+#: running off the edge, which a reviewer saw filled: 0.03 and 0.14; a black
+#: half-disc cut by the edge 0.64).
+NO_DATA_CONTACT = 0.8
 
 
 def no_data(gray: np.ndarray, border=None) -> np.ndarray | None:

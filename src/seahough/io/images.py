@@ -226,7 +226,7 @@ def read_image(path: str | os.PathLike, *, max_pixels: int = 200_000_000,
     if p.is_dir():
         raise ImageReadError(f"{p}: is a folder, not an image")
     if p.suffix.lower() == ".npy":
-        return _read_npy(p, max_pixels)
+        return _read_npy(p, max_pixels, max_memory_mb)
     from .frames import VIDEO_EXTENSIONS
     if p.suffix.lower() in VIDEO_EXTENSIONS:   # (not read whole: a dive's video is gigabytes)
         raise ImageReadError(f"{p}: a video, not an image: one of its frames is {p}#12 (from "
@@ -281,20 +281,31 @@ def _opencv_turns_tiff() -> bool:
     return _tiff_turned[0]
 
 
-def _read_npy(p: Path, max_pixels: int) -> np.ndarray:
+def _read_npy(p: Path, max_pixels: int, max_memory_mb: float) -> np.ndarray:
     """A NumPy ``.npy`` file's array as an image (HxW, HxWx3 or HxWx4; its
     levels are read as :func:`to_gray` reads an array's): a sonar's float
-    backscatter saved by a script. Its shape is checked before it is read."""
+    backscatter saved by a script. Its shape and size are checked before it
+    is read."""
     try:
         a = np.load(p, mmap_mode="r", allow_pickle=False)
     except (OSError, ValueError) as e:
         raise ImageReadError(f"{p}: not a NumPy array file ({e})") from None
+    if not isinstance(a, np.ndarray):        # (an .npz archive so named)
+        a.close()
+        raise ImageReadError(f"{p}: a NumPy archive of several arrays (.npz), not one array")
     if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[2] not in (1, 3, 4)):
         raise ImageReadError(f"{p}: a NumPy array of shape {a.shape}, not an image (HxW, "
                              "HxWx3 or HxWx4)")
     if a.shape[0] * a.shape[1] > max_pixels:
         raise ImageSizeError(f"{p}: {a.shape[1]}x{a.shape[0]} pixels is over the limit of "
                              f"{max_pixels}")
+    need = memory_needed(a.shape[1], a.shape[0], channels=a.shape[2] if a.ndim == 3 else 1,
+                         sample_bytes=a.dtype.itemsize, floating=a.dtype.kind == "f",
+                         file_bytes=a.nbytes)
+    if need > max_memory_mb * 2 ** 20:
+        raise ImageSizeError(f"{p}: a {a.shape} {a.dtype} array needs about "
+                             f"{need / 2 ** 20:.0f} MB to read and search, over the memory limit "
+                             f"of {max_memory_mb:g} MB (raise Config.max_memory_mb to allow it)")
     return np.array(a[:, :, 0] if a.ndim == 3 and a.shape[2] == 1 else a)
 
 
