@@ -1079,3 +1079,20 @@ def test_a_curve_search_that_found_nothing_draws_its_best_line():
     assert math.degrees(math.atan2(-(y[1] - y[0]), x[1] - x[0])) % 180 == pytest.approx(30, abs=1)
     assert any(t.get_text() == "best line, no curve" for t in fig.axes[0].texts)
     assert not [ln for ln in plot_curves(img, []).axes[0].lines if ln.get_linestyle() == ":"]
+
+
+def test_no_data_beyond_a_sonar_fan_is_outlined_dashed():
+    """The black beyond a forward-looking sonar's fan is filled before a search
+    (core.blanks.no_data): the overlay outlines it dashed, as it does the
+    other regions the search left out."""
+    from core.test_blanks import _sonar_fan
+
+    fan = _sonar_fan(True)
+    res = seahough.Detector(seahough.Pattern.line(120, 8), angle_range=(0, 180)).search(fan)
+    assert res.blanks.no_data is not None
+    ax = plot.plot_detections(fan, res.detections, blanks=res.blanks).axes[0]
+    sets = [c for c in ax.collections if type(c).__name__ in ("QuadContourSet", "ContourSet")
+            or hasattr(c, "levels")]
+    assert len(sets) == 1 and list(sets[0].levels) == [0.5]
+    plain = plot.plot_detections(fan, res.detections).axes[0]
+    assert not [c for c in plain.collections if hasattr(c, "levels")]

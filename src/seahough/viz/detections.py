@@ -36,8 +36,7 @@ _MAX_NATIVE = 8192
 
 def _check_max_width(max_width):
     """``max_width`` as :func:`plot_detections` uses it: None (the default
-    size), or a whole number of px >= 0 (0 and ``"native"``: the image's own
-    width).
+    size), or a whole number of px >= 0 (0 and ``"native"``: the image's own).
 
     >>> _check_max_width(None), _check_max_width("native"), _check_max_width(1600.0)
     (None, 0, 1600)
@@ -444,9 +443,9 @@ def _image_figure(image, max_width, bit_depth=None):
 
 
 def _draw_blank(ax, box, side: str, text: str) -> None:
-    """A region the search left out (a caption's box, a region of
-    ``Config.ignore``: (x0, y0, x1, y1)), dashed, with ``text`` beside it
-    on the picture's side (``side``: the image edge it touches, or "")."""
+    """A region the search left out (a caption's box, a region of ``Config.
+    ignore``: x0, y0, x1, y1), dashed, with ``text`` beside it on the
+    picture's side (``side``: the image edge it touches, or "")."""
     x0, y0, x1, y1 = (v - 0.5 for v in box)
     ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="0.85", lw=1.2, ls=(0, (4, 3)),
             path_effects=_THIN_OUTLINE)
@@ -511,9 +510,9 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
         otherwise drawn 16 times too dark).
     blanks : Blanks, optional
         What the search filled before it looked (``SearchResult.blanks``):
-        each burned-in caption's box and each region of ``Config.ignore``
-        is drawn dashed, marked "caption, not searched" or "ignored, not
-        searched" (an object under it could not be found).
+        each burned-in caption's box and each region of ``Config.ignore`` is
+        drawn dashed, "caption, not searched" or "ignored, not searched" (an
+        object under it could not be found); no data beyond the picture too.
     patterns : list of str, optional
         The names of a search's patterns (``list(detector.parts)``): each
         pattern's colour then stays the same in every image.
@@ -556,6 +555,8 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
     for box, side, text in left_out:
         _draw_blank(ax, box, side, text)     # (and kept free of the labels, as an object is)
         anchors.append(np.array([box[:2], box[2:]], float))
+    if getattr(blanks, "no_data", None) is not None:   # (black beyond a sonar's fan: filled)
+        ax.contour(blanks.no_data.view(np.uint8), [0.5], colors="0.85", linestyles="dashed")
     for i, (d, c) in enumerate(zip(detections, colours(detections, patterns))):
         is_line = d.kind == "line"
         seg = None
