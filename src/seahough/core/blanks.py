@@ -395,9 +395,9 @@ def no_data(gray: np.ndarray, border=None) -> np.ndarray | None:
     if h < 16 or w < 16 or min(p[0].min(), p[-1].min(), p[:, 0].min(),
                                 p[:, -1].min()) > NO_DATA_LEVEL:
         return None      # (most frames: nothing black at the edge, nothing more to do)
-    m = cv2.blur(p, (5, 5))
-    sd = np.sqrt(np.maximum(cv2.blur(p * p, (5, 5)) - m * m, 0.0))
-    dark = ((p <= NO_DATA_LEVEL) & (sd < BLANK_STD)).astype(np.uint8)
+    # (dark and flat: its 5x5 all at most NO_DATA_LEVEL; a 5x5 maximum, not the
+    # standard deviation of every pixel: 18 ms a 968x608 photo with dark corners)
+    dark = (cv2.dilate(p, np.ones((5, 5), np.uint8)) <= NO_DATA_LEVEL).view(np.uint8)
     n, lab, stats, _ = cv2.connectedComponentsWithStats(dark, connectivity=4)
     contact = np.bincount(np.concatenate([lab[0], lab[-1], lab[:, 0], lab[:, -1]]), minlength=n)
     rim = (dark > 0) & (cv2.erode(dark, np.ones((3, 3), np.uint8),
@@ -415,8 +415,11 @@ def no_data(gray: np.ndarray, border=None) -> np.ndarray | None:
     ring = grow(NO_DATA_GROW + 2) & ~grow(2)   # (3-5 px beyond: the flat test's 5x5 left 2)
     ring[[0, -1], :] = False
     ring[:, [0, -1]] = False
-    if not ring.any() or np.mean(p[ring] >= NO_DATA_LEVEL + BLANK_STEP) < NO_DATA_STEP \
-            or np.mean(sd[~grown] >= 2.0) < NO_DATA_TEXTURE:
+    if not ring.any() or np.mean(p[ring] >= NO_DATA_LEVEL + BLANK_STEP) < NO_DATA_STEP:
+        return None
+    m = cv2.blur(p, (5, 5))       # (the rest's texture, last: the rarest test to reach)
+    sd = np.sqrt(np.maximum(cv2.blur(p * p, (5, 5)) - m * m, 0.0))
+    if np.mean(sd[~grown] >= 2.0) < NO_DATA_TEXTURE:
         return None
     out = np.zeros(gray.shape[:2], bool)
     out[y0:y1, x0:x1] = grown
