@@ -172,6 +172,12 @@ def test_detect_csv_holds_what_json_holds(scenes, tmp_path):
     assert proc.returncode == 2 and "notes.png" in proc.stderr
     r, bad = list(csv.DictReader(io.StringIO(proc.stdout)))
     assert r["kind"] == "line" and r["line_angle"] and r["line_offset"] and r["error"] == ""
+    # ... with its visible extent, as the JSON's segment (the CSV had none)
+    (seg,) = [d["segment"] for d in json.loads(run(
+        "detect", "line:200,8", tmp_path / "rope.png", "--json", "-n", 1, "--angle-range", 0, 180,
+        "-q").stdout)["detections"]]
+    assert seg is not None and np.allclose(json.loads(r["segment"]), seg)
+    assert all(x["segment"] == "" for x in found)    # (a shape: none)
     # ... and its own row (a sonar user's trial: a CSV or JSON Lines reader lost track of
     # it): the reason in "error", nothing else but the file
     err = proc.stderr.strip().splitlines()
