@@ -1199,6 +1199,29 @@ def test_a_video_frame_by_name_in_odometry_and_names_that_are_no_frame(tmp_path)
                 f"named {path}#{example}, counted from 0; every frame: {path})"), proc.stderr
 
 
+def test_frames_too_small_for_motion_are_said_once(tmp_path):
+    """A video analyst's trial: a video of 48x40 frames gave one "unreadable:
+    too small" line a frame and wrote a run of nothing. A video says it once,
+    before the run (its header gives the size), and writes nothing; a folder
+    whose every frame is too small says it once too."""
+    path = moving_rectangle_video(tmp_path / "tiny.mp4", 6, size=(48, 40), start=(2, 2), step=1)
+    proc = run("odometry", path, "--out", tmp_path / "o")
+    assert proc.returncode == 2 and not (tmp_path / "o").exists()
+    assert proc.stderr.strip() == (f"seahough: error: {path}: its frames are 48x40, too small to "
+                                   "measure motion (each side must be at least 64 px)"), proc.stderr
+    with pytest.raises(seahough.ImageSizeError, match="tiny.mp4: its frames are 48x40"):
+        seahough.run_odometry(path, tmp_path / "o", progress=False)
+    folder = tmp_path / "small"
+    folder.mkdir()
+    for k in range(5):
+        cv2.imwrite(str(folder / f"f{k}.png"), np.full((40, 50), 30 * k, np.uint8))
+    proc = run("odometry", folder, "--out", tmp_path / "o2", "--no-mosaic")
+    assert proc.returncode == 1, proc.stderr
+    flagged = [line for line in proc.stdout.splitlines() if "flagged:" in line]
+    assert flagged == ["  flagged: every frame (5): unreadable: frame: 50x40 is too small to "
+                       "measure motion (each side must be at least 64 px)"], proc.stdout
+
+
 def test_odometry_notes_a_scene_whose_scale_changes_much(tmp_path):
     """A camera that looks ahead (or an altitude that changes much) makes the
     scene's scale drift: a user's forward-looking pool video reached 1.8x

@@ -279,16 +279,18 @@ def report(result, seconds: float, unit: str, as_json: bool) -> int:
     click.echo(f"frames: {summ['frames']}   flagged frames: {summ['flagged_pairs']}   "
                f"distance: {summ['distance']:.2f} {summ['unit']}   "
                f"time per frame: {summ['time_per_frame_ms']:.0f} ms")
-    n_flagged = n_sized = 0
-    for r in _odometry_rows(result):
-        if not r.get("flags"):
-            continue
-        n_flagged += 1
-        n_sized += "differs from the first frame's" in str(r.get("flags"))
-        if n_flagged <= 10:
-            click.echo(f"  flagged: frame {r.get('index')} {printable(r.get('file'))}: "
-                       f"{printable(r.get('flags'))}")
-    if n_flagged > 10:
+    flagged = [r for r in _odometry_rows(result) if r.get("flags")]
+    n_flagged = len(flagged)
+    n_sized = sum("differs from the first frame's" in str(r.get("flags")) for r in flagged)
+    said = {printable(r.get("flags")) for r in flagged}
+    if n_flagged > 2 and n_flagged == summ["frames"] and len(said) == 1:
+        # (one reason for every frame, frames too small say: once, not once a frame)
+        click.echo(f"  flagged: every frame ({n_flagged}): {said.pop()}")
+        flagged = []
+    for r in flagged[:10]:
+        click.echo(f"  flagged: frame {r.get('index')} {printable(r.get('file'))}: "
+                   f"{printable(r.get('flags'))}")
+    if len(flagged) > 10:
         click.echo(f"  ... and {n_flagged - 10} more (see the CSV's flags column)")
     if n_sized and n_sized == summ["frames"] - 1:
         click.echo("  note: every frame after the first has another size than the first: "

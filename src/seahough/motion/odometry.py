@@ -58,7 +58,7 @@ from .mosaic import build_mosaic
 from .odometer import TUNING, Odometer  # noqa: F401  (TUNING: the default policy, as before)
 from .prefetch import Prefetch, overlapped
 from .state import advance
-from .framing import content_box
+from .framing import check_video_sizes, content_box
 from .searcher import Searcher as _Searcher
 from .runfiles import (RunFolder, check_kept_row, check_kind, open_track, write_output,
                        write_row)
@@ -243,6 +243,7 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
     workers = check_workers(workers)
     _not_the_frames_folder(frames, out_dir)
     items = list_frames(frames)
+    check_video_sizes(items)
     cfg = odo.config
     reader = FrameReader(items, cfg.max_pixels, cfg.max_memory_mb, fps=odo.fps)
     with RunFolder(out_dir) as run:
