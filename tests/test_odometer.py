@@ -259,3 +259,22 @@ def test_pushes_from_two_threads_are_taken_in_turn_and_the_frame_is_copied():
     assert [r["dy"] for r in got[1:]] == pytest.approx([r["dy"] for r in want[1:]], abs=1e-6)
     with pytest.raises(seahough.ImageValueError, match="frame: expected a numpy array"):
         odo.push([[1, 2], [3, 4]])
+
+
+def test_frames_of_two_videos_pushed_are_on_one_time_line(tmp_path):
+    """A video analyst's trial: run_odometry puts a dive's videos on one time
+    line, but Odometer.push of the second video's frames restarted at 0 (a
+    velocity across the change went backwards in time)."""
+    from conftest import moving_rectangle_video
+
+    a = moving_rectangle_video(tmp_path / "a.mp4", 4)       # 5 fps: 0.8 s
+    b = moving_rectangle_video(tmp_path / "b.mp4", 3, start=(140, 80))
+    names = [f"{a}#{k}" for k in range(4)] + [f"{b}#{k}" for k in range(3)]
+    odo = seahough.Odometer()
+    times = [odo.push(n)["time"] for n in names]
+    assert times == pytest.approx([0.0, 0.2, 0.4, 0.6, 0.8, 1.0, 1.2])
+    ref = run_odometry([a, b], tmp_path / "run", progress=False, mosaic=False).rows
+    assert [r["time"] for r in ref] == pytest.approx(times)
+    odo.reset()                      # a new track: its own time line
+    assert odo.push(names[4])["time"] == pytest.approx(0.0)
+    assert seahough.Odometer().push(names[5], time=7.0)["time"] == 7.0   # (given: kept)

@@ -34,7 +34,7 @@ from ..core.accumulator import check_ranges
 from ..core.detector import MIN_SEGMENTS
 from ..errors import ImageValueError, ParameterError, interrupted
 from ..geometry import apply_matrix, compose, invert_matrix, matrix_power, nearest_similarity
-from ..io.frames import FrameReader
+from ..io.frames import FrameReader, split_video_ref
 from .framing import content_box
 from .prefetch import Prefetch, Prepared, read_frame
 from .runfiles import run_settings, settings_hash
@@ -135,6 +135,8 @@ class Odometer:
             self.frames: dict = {}   # index -> Frame: those the next one may be measured against
             self.hashes: dict = {}   # index -> frame_hash of those
             self._next = 0
+            self._video = None       # (path, last frame) of the last video frame pushed ...
+            self._video_t0 = 0.0     # ... and when that video began on the track's time line
 
     def push(self, frame, *, time: float | None = None, name: str | None = None) -> dict:
         """Measure the next frame; returns its row.
@@ -145,7 +147,11 @@ class Odometer:
             The frame (grey, BGR/BGRA, 8 or 16 bits, float), or its file.
             None: a frame the camera could not give (a dropped frame).
         time : float, optional
-            Its time (s); else ``index / fps`` when the Odometer has ``fps``.
+            Its time (s); else its file's (a time in its name, or a video
+            frame's, ``"dive.mp4#12"``: the frames of several videos pushed
+            one video after the other are on one time line, as in
+            :func:`~seahough.run_odometry`); else ``index / fps`` when the
+            Odometer has ``fps``.
         name : str, optional
             The row's ``file`` (default ``frame_NNNNN``, or the path).
 
@@ -182,6 +188,19 @@ class Odometer:
         with self._lock:
             return self._push(frame, time, name)
 
+    def _video_start(self, reader: FrameReader, name: str) -> float:
+        """When the video of frame ``name`` began on the track's time line:
+        a video after another starts where that one ends (its frame count
+        over its rate; a second video's times started at 0 again, and a
+        velocity across the change was wrong)."""
+        path, k = split_video_ref(name)
+        run = self._video
+        if run is not None and run[0] != path:
+            self._video_t0 += reader._video_length(*run)
+            run = None
+        self._video = (path, k if run is None else max(run[1], k))
+        return self._video_t0
+
     def _push(self, frame, time, name) -> dict:
         i = self._next
         t0 = _time.perf_counter()
@@ -201,6 +220,8 @@ class Odometer:
             time = number("time", time)
         else:   # (as run_odometry: a time in the file's name, else index / fps)
             time = reader.time(0)
+            if time is not None and reader.is_video(0):
+                time += self._video_start(reader, str(frame))
             if time is None and self.fps is not None:
                 time = i / self.fps
         try:
