@@ -21,7 +21,7 @@ from .candidates import Candidate, SearchContext, icp_subset
 from .features import Features
 from .lines import visible_segment
 from .keypoints import edge_points_near_image
-from .nfa import CELL, background, evidence, log10_tests
+from .nfa import CELL, background, evidence, search_tests
 from .parts import hole_labels, unseen_hole
 from .refine import Fit, Pose, match, refine
 from .symmetry import turn_pose
@@ -396,8 +396,10 @@ def _best_full(ctx: SearchContext, c: Candidate, alts, gray, where) -> None:
         full = _full_res(ctx, work, gray, where)
         if full.score > (c.full.score if best is None else best[1].score):
             best = (work, full)
-    if best is not None:
-        c.fit, c.work_score, c.full = best[0], best[0].score, best[1]
+    if best is not None:   # (counting judged the pose it had; a twin's is the runner-up's test)
+        c.fit, c.work_score, c.full, c.evidence = best[0], best[0].score, best[1], None
+        if ctx.counting:
+            judge(ctx, c)
 
 
 # ------------------------------------------------------------------- ranking
@@ -548,25 +550,6 @@ def _unseen_hole(ctx: SearchContext, c: Candidate) -> bool:
                    max(1.25, cfg.match_radius * ctx.factor), math.radians(cfg.angle_tolerance),
                    p.either)
     return unseen_hole(labels, ids >= 0, share)
-
-
-def search_tests(ctx: SearchContext) -> float:
-    """log10 of the distinct poses the search could have answered with
-    (:func:`~.nfa.log10_tests` over its accumulator's region and ranges)."""
-    pf, b = ctx.pf, ctx.bins
-    area = (b.nx - 1) * (b.ny - 1) * b.step * b.step
-    period = 180.0 if ctx.pattern.is_line else 360.0
-    span = math.hypot((b.nx - 1) * b.step, (b.ny - 1) * b.step) if ctx.pattern.is_line else None
-    line = ctx.pattern.is_line
-    width = ctx.pattern.line_width * ctx.factor if line else 0.0
-    length = ctx.pattern.line_length * ctx.factor if line else 0.0
-    # (a disc searched at one rotation counts a whole turn, whatever range was
-    # asked, Detector._counted_angles: the calibration of docs/nfa.md was
-    # fitted so; counting one, false alarms of discs and rings on real photos
-    # rose from 0.14 to 0.24 a search, with the bound model of the seventh session)
-    angles = ctx.asked_angles or ctx.angle_range
-    return (log10_tests(area, pf.radius, ctx.scale_range, angles, period, span, width, length)
-            + math.log10(ctx.searches))
 
 
 def to_detection(ctx: SearchContext, c: Candidate, conf: float, gray) -> Detection:
