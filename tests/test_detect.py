@@ -835,3 +835,25 @@ def test_counting_judges_a_candidate_again_when_its_finish_turned_it(monkeypatch
                                 (0.8, 1.25), max_results=10).search(img)
         stale += sum(judged[id(c)] is not c.fit.pose for c in res.candidates if id(c) in judged)
     assert any(turned) and stale == 0, (sum(turned), stale)
+
+
+def test_a_line_band_without_a_visible_stretch_is_not_reported():
+    """A pipeline engineer's trial: line detections whose band has no stretch
+    where both of its borders are seen (``segment`` None) were reported
+    (frames without a pipe, a dark pipe searched as bright: a band beside
+    it). A single straight edge was "a bright line" at NFA 0.04. Such a band
+    is declined and says why; a rope is still found, with its extent."""
+    rng = np.random.default_rng(1)
+    img = np.full((240, 320), 70, np.float32)
+    img[:, 170:] = 150
+    img = np.clip(cv2.GaussianBlur(img, (0, 0), 1.0) + rng.normal(0, 3, img.shape), 0, 255)
+    res = seahough.Detector(seahough.Pattern.line(120, 12), angle_range=(60, 120)).search(
+        img.astype(np.uint8))
+    assert res.detections == []
+    assert any(c.declined.startswith("no stretch of it where both of its borders are seen")
+               for c in res.candidates), [c.declined for c in res.candidates]
+    img[:, 170:] = 70
+    img[:, 150:163] = 160                       # a rope 13 px wide, the whole height
+    (d,) = seahough.Detector(seahough.Pattern.line(120, 12), angle_range=(60, 120),
+                             max_results=1).detect(img.astype(np.uint8))
+    assert d.segment is not None and abs(d.x - 156) < 1.5

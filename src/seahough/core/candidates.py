@@ -52,6 +52,8 @@ class Candidate:
     pattern: str = ""
     #: the working-scale pose in full-resolution pixels (ranking)
     placed: Pose | None = field(default=None, repr=False)
+    #: a line's visible extent, once ranking found it (:func:`.lines.visible_segment`)
+    segment: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def pose(self) -> Pose:
@@ -250,6 +252,8 @@ class SearchContext:
     #: many results asked for, to count objects (``Detector(max_results > 5)``):
     #: every candidate that could pass min_score is finished (ranking)
     counting: bool = False
+    #: a line is reported only with a visible extent (ranking); not a curve's pieces
+    line_extent: bool = True
 
     @property
     def n_candidates(self) -> int:

@@ -336,8 +336,7 @@ class _Follower:
     def next_piece(self, x, y, d, jump):
         """The piece ``jump`` px ahead of (x, y) along ``d`` (None: not found)."""
         px, py = x + jump * d[0], y + jump * d[1]
-        # the rope may bend away from the straight prediction: by at most
-        # max_turn over the jump, i.e. jump * sin(max_turn) across
+        # the rope may bend by at most max_turn over the jump: jump * sin(max_turn) across
         r = max(0.5 * self.width, 2.0) + jump * math.sin(math.radians(self.max_turn))
         a = math.degrees(math.atan2(-d[1], d[0])) % 180.0
         found = []
@@ -346,6 +345,7 @@ class _Follower:
                            config=self.cfg, max_results=1, min_score=_STEP_MIN_SCORE,
                            max_nfa=self.step_nfa, search_region=(px - r, py - r, px + r, py + r))
             self.steps += 1
+            det._line_extent = False   # (a piece of a bend: its line's extent is no measure)
             found = det.search(self.gray, features=self.features).detections
             if found:
                 break
@@ -557,7 +557,7 @@ def find_curves(image, width, *, width_range=(0.5, 1.5), polarity="bright",
             break
         seeder = Detector(Pattern.line(seed_length, w, polarity=polarity), s_range,
                           (0.0, 180.0), config=cfg, max_results=n_seeds, max_nfa=max_nfa)
-        seeder._counting = False   # (seeds to follow, not objects to count)
+        seeder._counting = seeder._line_extent = False   # (seeds to follow: not objects)
         res = seeder.search(gray, features=feats)
         feats = res.features                  # the shorter seed: on the same features
         why = {}                              # detection index -> why it made no curve

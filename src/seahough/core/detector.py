@@ -193,7 +193,7 @@ class Detector:
         if auto:
             self.config = self.config.replace(colour=pattern.in_colour(self.config))
         self.max_results = int(number("max_results", max_results, lo=1, integer=True))
-        self._counting = self.max_results > _DEFAULT_RESULTS   # (many objects: see rank)
+        self._counting, self._line_extent = self.max_results > _DEFAULT_RESULTS, True  # (see rank)
         self.min_score = number("min_score", min_score, lo=0.0, hi=1.0)
         self.min_confidence = number("min_confidence", min_confidence, lo=0.0, hi=1.0)
         self.max_nfa = check_max_nfa(max_nfa)
@@ -356,7 +356,7 @@ class Detector:
                             PoseComparison(p, pf, bins.step, self.scale_range,
                                            angles, cfg.search.overlap),
                             self.max_nfa, self._counted_angles(angles), searches,
-                            self._counting)
+                            self._counting, self._line_extent)
         cands = find_candidates(ctx, votes)
         t3 = time.perf_counter()
         timings["peaks_refine"] = t3 - t2
