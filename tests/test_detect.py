@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import csv
+import io
 import json
 import math
 
@@ -857,3 +859,37 @@ def test_a_line_band_without_a_visible_stretch_is_not_reported():
     (d,) = seahough.Detector(seahough.Pattern.line(120, 12), angle_range=(60, 120),
                              max_results=1).detect(img.astype(np.uint8))
     assert d.segment is not None and abs(d.x - 156) < 1.5
+
+
+def test_a_pipe_buried_in_the_middle_gives_its_two_stretches_seen(tmp_path):
+    """A pipeline engineer's trial: a pipe seen over 0-330 px, buried over 300
+    px and seen again came out as one stretch (the left one, or at other
+    ranges one across the buried gap): a burial survey's very question. Its
+    stretches seen are reported (API, JSON, CSV), its segment spans them,
+    and the overlay draws each."""
+    from seahough import viz as plot
+
+    rng = np.random.default_rng(3)
+    img = cv2.GaussianBlur(rng.normal(100, 12, (500, 900)).astype(np.float32), (0, 0), 2)
+    img[240:262, :300] += 70
+    img[240:262, 600:] += 70
+    img = np.clip(img + rng.normal(0, 2, img.shape), 0, 255).astype(np.uint8)
+    for scales in ((0.5, 2.0), (0.8, 1.25)):
+        (d,) = seahough.Detector(seahough.Pattern.line(300, 22), scales, (0, 180),
+                                 max_results=1).detect(img)
+        ends = [sorted(st[:, 0]) for st in d.stretches]
+        assert len(ends) == 2, (scales, ends)
+        assert all(abs(a - u) < 4 and abs(b - v) < 4
+                   for (a, b), (u, v) in zip(ends, [(-0.5, 299.5), (599.5, 899.5)])), ends
+        assert sorted(d.segment[:, 0]) == pytest.approx([ends[0][0], ends[1][1]])
+    rec = d.to_dict()
+    assert np.allclose(rec["stretches"], [st.tolist() for st in d.stretches], atol=1e-3)
+    fig = plot.plot_detections(img, [d])
+    bands = [ln for ln in fig.axes[0].lines if len(ln.get_xydata()) == 5]
+    assert len(bands) == 2
+    cv2.imwrite(str(tmp_path / "pipe.png"), img)
+    from test_cli import run
+    proc = run("detect", "line:300,22", tmp_path / "pipe.png", "--csv", "-q", "-n", 1,
+               "--angle-range", 0, 180)
+    (row,) = list(csv.DictReader(io.StringIO(proc.stdout)))
+    assert len(json.loads(row["stretches"])) == 2

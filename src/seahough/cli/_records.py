@@ -164,19 +164,20 @@ def _best_declined_line(c) -> str:
 #: shape's, a line's or a curve's: those that do not apply are empty);
 #: ``error`` is filled only in the one row of an image that could not be
 #: read or searched (every other field but ``file`` and ``frame`` empty);
-#: ``segment``, a line's visible extent ``[[x1, y1], [x2, y2]]`` (the JSON's),
-#: came last so that the columns before it kept their places.
+#: ``segment``, a line's visible extent ``[[x1, y1], [x2, y2]]``, and
+#: ``stretches``, the stretches of it seen (the JSON's), came last so that the
+#: columns before them kept their places.
 CSV_COLUMNS = ("file", "width", "height", "found", "note", "time_ms", "rank", "pattern", "kind",
                "x", "y", "scale", "angle", "score", "confidence", "nfa", "flags", "line_angle",
                "line_offset", "width_px", "length", "votes", "matrix", "points", "declined",
-               "frame", "error", "warning", "box", "segment")
+               "frame", "error", "warning", "box", "segment", "stretches")
 
 
 def error_row(name: str, problem: str) -> str:
     """The CSV line of an image that could not be read or searched.
 
-    >>> error_row("a.png", "truncated PNG").split(",")[-6:]
-    ['', '', 'truncated PNG', '', '', '']
+    >>> error_row("a.png", "truncated PNG").split(",")[-7:]
+    ['', '', 'truncated PNG', '', '', '', '']
     """
     return _csv_row(file=name, frame=_frame(name), error=problem)
 

@@ -52,8 +52,8 @@ class Candidate:
     pattern: str = ""
     #: the working-scale pose in full-resolution pixels (ranking)
     placed: Pose | None = field(default=None, repr=False)
-    #: a line's visible extent, once ranking found it (:func:`.lines.visible_segment`)
-    segment: np.ndarray | None = field(default=None, repr=False)
+    #: a line's stretches seen, once ranking looked (:func:`.lines.visible_stretches`)
+    stretches: list | None = field(default=None, repr=False)
 
     @property
     def pose(self) -> Pose:

@@ -87,8 +87,13 @@ class Detection(ValueEquality):
         Which pattern this is, for a Detector of several named patterns
         (``""`` for a Detector of one pattern).
     segment : ndarray (2, 2) or None
-        A line's visible extent, ``[[x0, y0], [x1, y1]]`` (:mod:`.lines`; a
-        pipe's length; ``box`` in ``to_dict`` is the band's there), or None.
+        A line's visible extent, ``[[x0, y0], [x1, y1]]``: from the first
+        stretch where the image shows both of its borders to the last
+        (:mod:`.lines`; ``box`` in ``to_dict`` is the band's there), or None.
+    stretches : list of ndarray (2, 2)
+        A line's stretches seen, in order along it (one, or more where
+        stretches of it are hidden: a pipe buried in places); their lengths
+        add up to its visible length.
     """
 
     x: float
@@ -107,6 +112,7 @@ class Detection(ValueEquality):
     nfa: float = float("nan")
     pattern: str = ""
     segment: np.ndarray | None = field(default=None, repr=False)
+    stretches: list = field(default_factory=list, repr=False)
 
     def to_dict(self) -> dict:
         """Plain-Python form for JSON; with an outline, ``box``: its bounding box
@@ -128,7 +134,8 @@ class Detection(ValueEquality):
         seg = None if self.segment is None else np.asarray(self.segment, float)
         if self.kind == "line":
             d.update(line_angle=self.line_angle, line_offset=self.line_offset,
-                     segment=None if seg is None else seg.round(3).tolist())
+                     segment=None if seg is None else seg.round(3).tolist(),
+                     stretches=[np.asarray(st, float).round(3).tolist() for st in self.stretches])
         if self.outline:
             pts = np.vstack(self.outline)
             if seg is not None:   # (the band there: the outline's length is the pattern's)

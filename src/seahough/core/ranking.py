@@ -19,7 +19,7 @@ from .candidates import Candidate, SearchContext, icp_subset
 from .detection import (FLAG_ALONG_LINE, FLAG_AMBIGUOUS, FLAG_GREY, FLAG_OUTSIDE_RANGE,  # noqa: F401
                         FLAG_PARTIAL, FLAG_RANGE_EDGE, Detection, confidence)
 from .features import Features
-from .lines import visible_segment
+from .lines import visible_stretches
 from .keypoints import edge_points_near_image
 from .nfa import CELL, background, evidence, search_tests
 from .parts import hole_labels, unseen_hole
@@ -377,7 +377,7 @@ def _line_unseen(ctx: SearchContext, c: Candidate, gray) -> bool:
     no stretch where both borders of its band are edges. Such bands were 47 of 126
     false gate posts of RoboSub's tune part at the defaults (2 of 28 right ones)."""
     d = to_detection(ctx, c, 1.0, gray)
-    c.segment = d.segment
+    c.stretches = d.stretches
     return d.segment is None
 
 
@@ -453,7 +453,8 @@ def to_detection(ctx: SearchContext, c: Candidate, conf: float, gray) -> Detecti
     det = Detection(float(x), float(y), float(s), float(a), float(c.full.score), conf,
                     m, outline, c.votes, kind, la, lo, tuple(flags), c.evidence.nfa)
     if p.is_line:   # (in a colour search's BGR image, its grey copy's; once)
-        det.segment = c.segment if c.segment is not None else visible_segment(
+        st = c.stretches if c.stretches is not None else visible_stretches(
             gray if gray.ndim == 2 else cv2.cvtColor(np.ascontiguousarray(gray),
                                                      cv2.COLOR_BGR2GRAY), det, ctx.config.min_gradient)
+        det.stretches, det.segment = st, (np.array([st[0][0], st[-1][1]]) if st else None)
     return det

@@ -116,10 +116,11 @@ def detections_size(shape, *, max_width=None) -> tuple[int, int]:
 
 
 def _draw_line(ax, d, colour, gray, w, h):
-    """Draw line detection ``d``: the segment along the object (its visible
-    extent, its ``segment`` or :func:`~.core.lines.visible_segment`) as its
-    two borders closed at the ends, and return its ends ``[[x0, y0], [x1,
-    y1]]``; or, when no extent is found, its borders across the image (None)."""
+    """Draw line detection ``d``: each stretch seen along the object (its
+    ``stretches``, its ``segment``, or :func:`~.core.lines.visible_segment`) as
+    its two borders closed at the ends, and return the ends of its extent
+    ``[[x0, y0], [x1, y1]]``; or, when none is found, its borders across the
+    image (None)."""
     borders = [np.asarray(o, float).reshape(-1, 2) for o in d.outline]
     borders = [o[0] for o in borders if len(o) >= 2]
     a = math.radians(d.line_angle)
@@ -139,9 +140,9 @@ def _draw_line(ax, d, colour, gray, w, h):
                         path_effects=_OUTLINE)
         return None
     ends = np.asarray(seg, float)
-    band = np.array([ends[0] - half * nv, ends[1] - half * nv, ends[1] + half * nv,
-                     ends[0] + half * nv, ends[0] - half * nv])
-    ax.plot(band[:, 0], band[:, 1], color=colour, lw=1.8, path_effects=_OUTLINE)
+    for a0, a1 in getattr(d, "stretches", None) or [ends]:   # (a buried stretch: a gap)
+        band = np.array([a0 - half * nv, a1 - half * nv, a1 + half * nv, a0 + half * nv, a0 - half * nv])
+        ax.plot(band[:, 0], band[:, 1], color=colour, lw=1.8, path_effects=_OUTLINE)
     return ends
 
 
@@ -310,8 +311,7 @@ def _notes(fig, ax, items, pattern, corners, wh, box_wh, listed: bool = False):
     side_w = fw - x_side - 8
     top_px = bottom + box_wh[1] / 2 + dh / 2    # the image's top edge
     if _short_strip(*wh, *box_wh):
-        # the box is taller than the image: the image at the top, the notes
-        # under its x axis
+        # the box is taller than the image: the image at the top, the notes under its x axis
         ax.set_anchor("N")
         _notes_below(fig, items, pattern, (left, bottom + box_wh[1] - dh - _UNDER_AXIS),
                      fw - left - 8, nf_size)
