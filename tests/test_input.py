@@ -321,6 +321,36 @@ def test_a_video_frame_by_its_name_and_every_frame_in_order(tmp_path, caplog):
     assert "bad.png" in caplog.text
 
 
+def test_a_unit_float_frame_with_a_hot_pixel_is_still_read_as_one(monkeypatch):
+    """A docking engineer's trial: one pixel at 3.0 (a glint, a hot pixel) in a
+    0-1 float frame made the whole frame levels 0-3 of 255: the marker "not
+    found", without a word for float32. Most values between 0 and 1, at most
+    5 % over: read as 0-1, those saturated, said once; a dark 8-bit frame in
+    float (whole levels 0, 1 and a few bright) is still levels 0-255."""
+    import warnings
+
+    from seahough.errors import LevelsWarning
+    from seahough.io import levels
+
+    monkeypatch.setattr(levels, "_SAID_LEVELS", set())
+    unit = _scene().astype(np.float32) / 255.0
+    hot = unit.copy()
+    hot[0, 0], hot[5, 7] = 3.0, 40.0
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        g = to_gray(hot, name="f.png")
+        to_gray(hot)                                   # (said once)
+    assert np.array_equal(g[1:, 8:], to_gray(unit)[1:, 8:]) and g[0, 0] == g[5, 7] == 255.0
+    said = [str(x.message) for x in w if issubclass(x.category, LevelsWarning)]
+    assert said == ["f.png: a 0-1 float image with a few values far over 1 (up to 40: hot "
+                    "pixels, a glint?), read as 0-1 (those saturate, as 1 does)"], said
+    box = seahough.Pattern.rectangle(60, 40)
+    assert seahough.Detector(box).detect(hot)
+    dark = np.zeros((100, 120), np.float32)
+    dark[40:60, 40:80], dark[0, :4] = 1.0, 3.0          # (8-bit levels 0, 1 and 3)
+    assert to_gray(dark).max() == 3.0
+
+
 def test_a_dim_unit_float_image_is_said_with_its_file_name(tmp_path, monkeypatch, capsys):
     """A sonar user's trial: linear backscatter as float32 0-0.05 (levels up to
     12.8 of 255) was "not found" without a word, where a dark 16-bit file is

@@ -412,7 +412,7 @@ def _levels(image, label, max_pixels, min_side, max_memory_mb, orientation,
             # (float32 is also what the package hands itself: a dark 8-bit frame
             # converted once is no "dim float image" of the user's)
             say_levels(lo, hi, label, dim=a.dtype != np.float32)
-        elif 0.0 < hi < DIM_UNIT:
+        elif 0.0 < hi < DIM_UNIT or hi > OVERSHOOT:
             say_levels(lo, hi, label, unit=True)
         if not unit and a.dtype == np.float32 and a.flags.c_contiguous and a.ndim == 2:
             # already the levels a search works on (a frame cropped and checked

@@ -19,7 +19,11 @@ from ..errors import BitDepthWarning, LevelsWarning, warn_at_caller
 #: Float images in [0, 1] are scaled to 0-255; so are those within 1 of it (up
 #: to :data:`OVERSHOOT`) with at most :data:`OVERSHOOT_SHARE` of their values
 #: outside it, not whole numbers (colour correction's overshoot: saturated;
-#: whole numbers are a dark 8-bit frame's levels). Others are levels 0-255.
+#: whole numbers are a dark 8-bit frame's levels), and those with at most that
+#: share over it, however far, when most of their values lie between 0 and 1
+#: (a hot pixel, a glint: one pixel at 3 made a 0-1 frame levels 0-3 of 255,
+#: "not found" without a word). Values over 1 saturate, as 1 does. Others are
+#: levels 0-255.
 OVERSHOOT = 2.0
 OVERSHOOT_SHARE = 0.05
 
@@ -34,13 +38,20 @@ def _unit_levels(a: np.ndarray, lo: float, hi: float) -> bool:
     >>> dark = np.zeros((10, 10), np.float32); dark[0, :3] = 2.0   # (8-bit levels 0-2)
     >>> _unit_levels(dark, 0.0, 2.0)
     False
+    >>> img[2, 2] = 3.0                                 # (a hot pixel)
+    >>> _unit_levels(img, -0.01, 3.0), _unit_levels(dark + np.eye(10)[0] * 3, 0.0, 3.0)
+    (True, False)
     """
-    if lo < 1.0 - OVERSHOOT or hi > OVERSHOOT:
+    if lo < 1.0 - OVERSHOOT:
         return False
     if lo >= 0.0 and hi <= 1.0:
         return True
     out = a[(a > 1.0) | (a < 0.0)]
-    return bool(out.size <= OVERSHOOT_SHARE * a.size and np.any(out != np.round(out)))
+    if out.size > OVERSHOOT_SHARE * a.size:
+        return False
+    if hi <= OVERSHOOT:
+        return bool(np.any(out != np.round(out)))
+    return bool(np.count_nonzero((a > 0.0) & (a < 1.0)) >= 0.5 * a.size)
 
 
 #: The kinds of float levels :class:`~seahough.errors.LevelsWarning` was given for.
@@ -60,7 +71,15 @@ def say_levels(lo: float, hi: float, label: str, dim: bool = True,
     -0.5 (a -1..1 image), over 1024, or (``dim``: not for float32, the
     package's own levels) a largest value of at most 10 (a dark frame, or a
     0-1 image with too many values over 1 to be read as one); ``unit``: a
-    0-1 image read so, whose values reach only ``hi`` (under :data:`DIM_UNIT`)."""
+    0-1 image read so, whose values reach only ``hi`` (under :data:`DIM_UNIT`),
+    or with values far over 1 (over :data:`OVERSHOOT`)."""
+    if unit and hi > OVERSHOOT:
+        if "hot 0-1" not in _SAID_LEVELS:
+            _SAID_LEVELS.add("hot 0-1")
+            warn_at_caller(f"{label}: a 0-1 float image with a few values far over 1 (up to "
+                           f"{hi:.3g}: hot pixels, a glint?), read as 0-1 (those saturate, as 1 "
+                           "does)", LevelsWarning)
+        return
     if unit:
         if "dim 0-1" in _SAID_LEVELS:
             return
