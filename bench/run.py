@@ -1141,8 +1141,10 @@ def findings(results) -> str:
             "objects (a plank or tag of a similar aspect ratio): a plain rectangle is not a "
             "distinctive marker, and the L fits its corner. "
             "The confidence separates worse (AUC "
-            f"{num(r['auc']['confidence'], 3)}) because a 180-degree symmetric rectangle's turned "
-            "copy is always the runner-up (confidence ~0 on true rectangles).")
+            f"{num(r['auc']['confidence'], 3)}): it measures how distinct a find is from the "
+            "runner-up, and a plain rectangle among planks and tags has look-alikes (its half "
+            "turn is the same answer, no rival: its angle is known up to 180 degrees, flag "
+            "same_turned_180).")
     if "real" in results and "rows" in results["real"]:
         rs = {(x["seq"], x["method"]): x for x in results["real"]["rows"]}
         sv = rs.get(("subvo_pool_chain", "seahough"))

@@ -575,7 +575,7 @@ def test_several_patterns_say_which_found_nothing(tmp_path):
     assert rows[1]["declined"] and rows[1]["x"] == "" and rows[1]["rank"] == ""
     # a detection's row has its outline's bounding box, as JSON has (an archaeologist's wish)
     assert json.loads(rows[0]["box"]) == pytest.approx(rec["detections"][0]["box"])
-    assert rows[1]["box"] == "" and list(rows[0])[-1] == "box"
+    assert rows[1]["box"] == "" and list(rows[0])[-3:] == ["box", "segment", "stretches"]
 
 
 def test_angles_near_360_are_printed_wrapped():
@@ -1368,3 +1368,25 @@ def test_an_ellipse_spec_finds_an_ellipse(tmp_path):
     assert proc.returncode == 0, proc.stderr
     d = json.loads(proc.stdout)["detections"][0]
     assert abs(d["x"] - 150) < 1.0 and abs(d["y"] - 110) < 1.0 and len(d["outline"][0]) > 30
+
+
+def test_the_table_of_several_patterns_gives_a_lines_offset():
+    """A pipeline engineer's trial: ``detect "pipe=line:300,30+joint=rect:60,34"``
+    printed the pipe's x, y, scale and angle, not its offset (its CSV and
+    JSON had it): the table of several patterns has an offset column when a
+    line is among them."""
+    from types import SimpleNamespace as D
+
+    from seahough.cli._records import _detection_lines
+
+    common = dict(x=10.0, y=20.0, scale=1.0, score=0.9, confidence=0.8, nfa=1e-9, flags=())
+    pipe = D(kind="line", pattern="pipe", angle=30.0, line_angle=30.0, line_offset=-12.5,
+             **common)
+    joint = D(kind="object", pattern="joint", angle=45.0, line_angle=None, line_offset=None,
+              **common)
+    head, *rows = [line.split() for line in _detection_lines([pipe, joint]) if line.strip()]
+    head = [h for h in head if set(h) != {"-"}]
+    rows = [r for r in rows if set(r[0]) != {"-"}]
+    col = head.index("offset")
+    assert rows[0][col] in ("-12.50", "12.50") and rows[1][col] == "-", (head, rows)
+    assert "offset" not in " ".join(_detection_lines([joint]))

@@ -884,6 +884,7 @@ def test_a_pipe_buried_in_the_middle_gives_its_two_stretches_seen(tmp_path):
         assert sorted(d.segment[:, 0]) == pytest.approx([ends[0][0], ends[1][1]])
     rec = d.to_dict()
     assert np.allclose(rec["stretches"], [st.tolist() for st in d.stretches], atol=1e-3)
+    assert abs(rec["width"] - 22) < 3        # (its band's width, px: the CSV's was empty)
     fig = plot.plot_detections(img, [d])
     bands = [ln for ln in fig.axes[0].lines if len(ln.get_xydata()) == 5]
     assert len(bands) == 2
@@ -892,4 +893,37 @@ def test_a_pipe_buried_in_the_middle_gives_its_two_stretches_seen(tmp_path):
     proc = run("detect", "line:300,22", tmp_path / "pipe.png", "--csv", "-q", "-n", 1,
                "--angle-range", 0, 180)
     (row,) = list(csv.DictReader(io.StringIO(proc.stdout)))
-    assert len(json.loads(row["stretches"])) == 2
+    assert len(json.loads(row["stretches"])) == 2 and abs(float(row["width_px"]) - 22) < 3
+
+
+def test_a_pattern_the_same_turned_by_a_half_says_its_angle_is_known_up_to_it():
+    """A docking engineer's trial: a rectangle marker turned by 179.5 and
+    180.5 degrees read 179.5 and 0.5, confidence 1, no flag: a controller
+    would command a U-turn. Its detections say the angle is known up to a
+    half turn (a square's: a quarter); an L's, a disc's say nothing."""
+    from seahough.core.detection import FLAG_HALF_TURN, FLAG_QUARTER_TURN
+
+    img, mask = S.marker("rectangle", 120)
+    bg = np.full((480, 640, 3), 90, np.uint8)
+    angles = []
+    for turn in (179.5, 180.5):
+        scene, _ = S.paste_pattern(bg, img, mask, x=320, y=240, scale=1.0, angle=turn, seed=1)
+        (d,) = seahough.Detector(seahough.Pattern.from_image(img, mask=mask), (0.7, 1.3),
+                                 max_results=1).detect(scene)
+        assert FLAG_HALF_TURN in d.flags and d.confidence > 0.5, d.flags
+        angles.append(d.angle)
+    assert abs(((angles[1] - angles[0] + 90.0) % 180.0) - 90.0) < 2.0, angles   # (modulo 180)
+    square, disc = np.zeros((200, 200), np.uint8), np.zeros((200, 200), np.uint8)
+    cv2.rectangle(square, (70, 70), (130, 130), 200, -1)
+    cv2.circle(disc, (100, 100), 30, 200, -1)
+    cases = ((seahough.Pattern.rectangle(60, 60), square, FLAG_QUARTER_TURN),
+             (seahough.Pattern.circle(30), disc, None),
+             (seahough.Pattern.from_image(*S.marker("L", 120)), None, None))
+    for pattern, scene, flag in cases:
+        if scene is None:
+            scene, _ = S.paste_pattern(bg, *S.marker("L", 120), x=320, y=240, scale=1.0,
+                                       angle=30.0, seed=1)
+        found = seahough.Detector(pattern, max_results=1, min_score=0.3).detect(scene)
+        assert found, pattern.kind
+        turned = {f for f in found[0].flags if f.startswith("same_turned")}
+        assert turned == ({flag} if flag else set()), (pattern.kind, found[0].flags)

@@ -326,7 +326,8 @@ def test_the_black_beyond_a_sonar_fan_is_no_data():
     disc = img.copy()                               # a black half-disc cut by the edge
     cv2.circle(disc, (160, 239), 50, 0, -1)
     assert no_data(cable) is None and no_data(shadow) is None and no_data(disc) is None
-    assert seahough.Detector(seahough.Pattern.line(150, 12), max_results=2).detect(cable)
+    assert seahough.Detector(seahough.Pattern.line(150, 12, polarity="dark"),
+                             max_results=2).detect(cable)
     turned = cv2.warpAffine(img, cv2.getRotationMatrix2D((160, 120), 25, 0.8), (320, 240))
     assert 0.3 < no_data(turned).mean() < 0.45
     # the dark water in the amphora wreck's corner fades into the picture: kept

@@ -55,10 +55,13 @@ def _detection_lines(dets) -> list[str]:
     if dets and getattr(dets[0], "kind", None) == "curve":
         return _curve_lines(dets)
     if any(getattr(d, "pattern", "") for d in dets):   # several patterns: one table
-        header = ("#", "pattern", "x", "y", "scale", "angle", "score", "conf", "nfa", "flags")
+        # (a line's offset too, when there is one: a pipe's was left out, a user trial)
+        lines = any(d.kind == "line" for d in dets)
+        header = ("#", "pattern", "x", "y", "scale", "angle", *(("offset",) * lines), "score",
+                  "conf", "nfa", "flags")
         rows = [(i + 1, d.pattern, f"{d.x:.2f}", f"{d.y:.2f}", f"{d.scale:.3f}",
-                 format_angle(d.line_angle, 2, 180.0) if d.kind == "line"
-                 else format_angle(d.angle, 2),
+                 *(_line_cells(d) if d.kind == "line" else
+                   (format_angle(d.angle, 2), "-")[: 1 + lines]),
                  f"{d.score:.2f}", f"{d.confidence:.2f}", _nfa_text(d.nfa),
                  ",".join(f for f in d.flags if f != FLAG_ALONG_LINE))
                 for i, d in enumerate(dets)]
@@ -233,7 +236,7 @@ def _csv_rows(name, w, h, note, ms, dets, nears=(), warning=""):
     out = []
     for rank, d in enumerate(dets, 1):
         rec = {k: v for k, v in d.to_dict().items() if k not in ("outline", "declined")}
-        rec["width_px"] = rec.pop("width", None)   # (a curve's width, not the image's)
+        rec["width_px"] = rec.pop("width", None)   # (a curve's or a line's, not the image's)
         out.append(_csv_row(**{**rec, **head}, found="true", rank=rank))
     for who, near in nears if dets else (list(nears) or [("", None)]):
         why = near.declined + _option_hint(near) if near is not None else ""

@@ -130,7 +130,9 @@ def detect(pattern, inputs, out, workers, scheduler, batch_size, retry_errors, a
                           row-major), votes, kind, line_angle,
                           line_offset, flags, pattern (its name, for
                           several patterns: NAME=SPEC+NAME=SPEC), segment
-                          (a line's visible extent: x0 y0 x1 y1)
+                          (a line's visible extent: x0 y0 x1 y1),
+                          stretches (a line's stretches seen, each x0 y0
+                          x1 y1), width (a line's band, px)
       survey.json         the settings, the inputs and the counts
     Results are saved in shards as they come (parts/): run the same
     command again to continue an interrupted survey (nothing is searched

@@ -27,6 +27,12 @@ FLAG_OUTSIDE_RANGE = "outside_search_range"
 #: further than searched, and only a part of it matched; widen the range
 #: to see.
 FLAG_RANGE_EDGE = "at_search_range_edge"
+#: Flags when the pattern looks the same turned by a half (a rectangle, an
+#: ellipse) or a quarter turn (a square): its angle is known up to that turn
+#: (a controller reading 179.5 then 0.5 degrees for a half turn of 1 degree
+#: should read them modulo 180). Not for discs and rings (any turn).
+FLAG_HALF_TURN = "same_turned_180"
+FLAG_QUARTER_TURN = "same_turned_90"
 #: Flag when a painted pattern searched in colour (``Config.colour`` None)
 #: found nothing and its grey edges found this: its NFA (and its search's
 #: candidates') counts both searches.
@@ -117,7 +123,9 @@ class Detection(ValueEquality):
     def to_dict(self) -> dict:
         """Plain-Python form for JSON; with an outline, ``box``: its bounding box
         ``[x0, y0, x1, y1]`` in image pixels (a line's: its band's along its
-        ``segment``, when it has one), and ``outline``: its polylines.
+        ``segment``, when it has one), and ``outline``: its polylines; a
+        line's ``width``, its band's in image pixels (the pattern's times its
+        scale).
 
         >>> d = Detection(1.0, 2.0, 1.0, 0.0, 0.9, 0.8, np.eye(2, 3))
         >>> sorted(d.to_dict())[:4]
@@ -132,16 +140,17 @@ class Detection(ValueEquality):
              "kind": self.kind, "flags": list(self.flags),
              "nfa": self.nfa if math.isfinite(self.nfa) else None, "pattern": self.pattern}
         seg = None if self.segment is None else np.asarray(self.segment, float)
+        pts = np.vstack(self.outline) if self.outline else None
         if self.kind == "line":
-            d.update(line_angle=self.line_angle, line_offset=self.line_offset,
+            a = math.radians(self.line_angle)
+            n = np.array([math.sin(a), math.cos(a)])
+            width = None if pts is None else float(np.ptp(pts @ n))   # (the band's, in px)
+            d.update(line_angle=self.line_angle, line_offset=self.line_offset, width=width,
                      segment=None if seg is None else seg.round(3).tolist(),
                      stretches=[np.asarray(st, float).round(3).tolist() for st in self.stretches])
         if self.outline:
-            pts = np.vstack(self.outline)
             if seg is not None:   # (the band there: the outline's length is the pattern's)
-                a = math.radians(self.line_angle)
-                n = np.array([math.sin(a), math.cos(a)])
-                pts = np.vstack([seg - np.ptp(pts @ n) / 2 * n, seg + np.ptp(pts @ n) / 2 * n])
+                pts = np.vstack([seg - width / 2 * n, seg + width / 2 * n])
             d["box"] = [float(v) for v in (*pts.min(axis=0), *pts.max(axis=0))]
             d["outline"] = [np.asarray(o, float).round(3).tolist() for o in self.outline]
         return d

@@ -166,8 +166,8 @@ class Detector:
     >>> _ = cv2.fillPoly(img, [np.round(box).astype(np.int32)], 220)
     >>> found = Detector(Pattern.rectangle(60, 40)).detect(img)
     >>> d = found[0]
-    >>> round(d.x), round(d.y), round(d.scale, 1), round(d.angle), d.flags
-    (200, 110, 1.5, 30, ())
+    >>> round(d.x), round(d.y), round(d.scale, 1), round(d.angle), d.flags   # (the same at 210)
+    (200, 110, 1.5, 30, ('same_turned_180',))
     """
 
     def __init__(self, pattern, scale_range=(0.5, 2.0), angle_range=(0.0, 360.0), *,
@@ -321,9 +321,9 @@ class Detector:
         angles = self._angles()
         # a pattern more than twice the image's diagonal at every searched scale is
         # not there (up to that, an object larger than the frame may be partly in
-        # view: it is searched); larger scales than that are not searched (they
-        # would only size the accumulator)
-        fit = 2.0 * math.hypot(*gray.shape[:2]) / p.extent
+        # view; a line's length, the stretch to match, must fit in it); larger
+        # scales than that are not searched (they would only size the accumulator)
+        fit = (1.0 if p.is_line else 2.0) * math.hypot(*gray.shape[:2]) / p.extent
         s1 = min(s1, max(fit, s0))
         if factor is None:
             factor = (features.gradients.factor if features is not None

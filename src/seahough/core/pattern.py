@@ -23,8 +23,8 @@ from .._memo import Memo
 from .features import extract_features
 from ..io.images import to_gray
 from . import pattern_io as _pio
-from .keypoints import chain_share, edge_points_near_image, find_edge_points, spread_points
-from .preprocess import choose_factor, compute_gradients
+from .keypoints import chain_share, edge_points_near_image, spread_points
+from .preprocess import choose_factor
 from . import shapes as _shapes
 
 POLARITIES = ("bright", "dark", "either")
@@ -254,7 +254,8 @@ class Pattern:
             alone has edges only when searched in colour: :meth:`in_colour`).
         """
         if polarity not in _IMAGE_POLARITIES:
-            raise ParameterError(f"polarity={polarity!r}: must be one of same, inverted, either")
+            raise ParameterError(f"polarity={polarity!r}: must be one of same, inverted, either "
+                                 "(or bright, dark: same, inverted)")
         return cls(image, mask, origin, polarity=_IMAGE_POLARITIES[polarity], kind="image",
                    config=config)
 
@@ -440,15 +441,9 @@ class Pattern:
 
     def _near_turns(self, config: Config) -> tuple:
         """:meth:`near_turns`, computed."""
-        from .symmetry import near_turns
-        f = self.features(1.0, config)
-        # (the sampled points against all the edges they were taken from)
-        e = find_edge_points(compute_gradients(np.asarray(self._prepared(config), np.float32),
-                                               1.0, config.equalize), config.min_gradient)
-        if self._edge_mask is not None and len(e):
-            e = e.take(self._edge_mask[e.iy, e.ix])
-        return near_turns(f.vx, f.vy, f.vangle, e, e.index_map(), self.origin,
-                          tol=math.radians(config.angle_tolerance))
+        from .symmetry import EXACT, NEAR, pattern_turn_shares
+        return tuple((th, cx, cy) for share, th, cx, cy in pattern_turn_shares(self, config)
+                     if NEAR <= share < EXACT)
 
     def finish_points(self, factor: float, config: Config | None = None):
         """``(vx, vy, vangle)``: the points that refine a pose found at working

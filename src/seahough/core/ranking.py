@@ -16,15 +16,16 @@ import numpy as np
 from . import kernels as K
 from ..geometry import angle_difference, apply_matrix, line_parameters, pose_to_matrix
 from .candidates import Candidate, SearchContext, icp_subset
-from .detection import (FLAG_ALONG_LINE, FLAG_AMBIGUOUS, FLAG_GREY, FLAG_OUTSIDE_RANGE,  # noqa: F401
-                        FLAG_PARTIAL, FLAG_RANGE_EDGE, Detection, confidence)
+from .detection import (FLAG_ALONG_LINE, FLAG_AMBIGUOUS, FLAG_GREY, FLAG_HALF_TURN,  # noqa: F401
+                        FLAG_OUTSIDE_RANGE, FLAG_PARTIAL, FLAG_QUARTER_TURN, FLAG_RANGE_EDGE,
+                        Detection, confidence)
 from .features import Features
 from .lines import visible_stretches
 from .keypoints import edge_points_near_image
 from .nfa import CELL, background, evidence, search_tests
 from .parts import hole_labels, unseen_hole
 from .refine import Fit, Pose, match, refine
-from .symmetry import turn_pose
+from .symmetry import pattern_turn_shares, symmetry_turn, turn_pose
 
 #: A candidate's pose may move this share of the pattern's size to a shift
 #: more of its points agree on (:func:`_alternatives`).
@@ -446,6 +447,9 @@ def to_detection(ctx: SearchContext, c: Candidate, conf: float, gray) -> Detecti
     if conf < 0.2:
         flags.append(FLAG_AMBIGUOUS)
     flags += [FLAG_ALONG_LINE] if p.is_line else []
+    if p.kind not in ("circle", "ring"):     # (the same at any turn: no angle to tell)
+        turn = symmetry_turn(pattern_turn_shares(p, ctx.config))
+        flags += {90.0: [FLAG_QUARTER_TURN], 180.0: [FLAG_HALF_TURN]}.get(turn, [])
     if ctx.compare.outside_ranges(s, a):
         flags.append(FLAG_OUTSIDE_RANGE)
     elif ctx.compare.at_range_edge(s, a):

@@ -26,6 +26,8 @@ import math
 import numpy as np
 
 from . import kernels as K
+from .keypoints import find_edge_points
+from .preprocess import compute_gradients
 from .refine import Pose
 
 #: Share of the pattern's points a turn must map onto its own points for a
@@ -67,6 +69,15 @@ def near_turns(vx, vy, vang, edges, index, origin=(0.0, 0.0), *, tol: float,
     >>> [round(math.degrees(t[0])) for t in turns(img)]
     [90, 180, 270]
     """
+    return tuple((theta, cx, cy) for share, theta, cx, cy in turn_shares(
+        vx, vy, vang, edges, index, origin, tol=tol, radius=radius) if NEAR <= share < EXACT)
+
+
+def turn_shares(vx, vy, vang, edges, index, origin=(0.0, 0.0), *, tol: float,
+                radius: float = 1.5) -> tuple:
+    """``((share, theta, cx, cy), ...)`` for each turn of :data:`TURNS`: the
+    share of the points it maps onto the pattern's edges (:func:`near_turns`
+    says how); ``()`` for fewer than 8 points or edges."""
     vx, vy, vang = (np.asarray(v, np.float64) for v in (vx, vy, vang))
     if vx.size < 8 or len(edges) < 8:
         return ()
@@ -79,10 +90,41 @@ def near_turns(vx, vy, vang, edges, index, origin=(0.0, 0.0), *, tol: float,
         q = turn_pose(Pose(1.0, 0.0, ox, oy), theta, cx, cy)   # turned, in image pixels
         ids, _ = K.match_points(vx, vy, vang, q.a, q.b, q.tx, q.ty, edges.x, edges.y,
                                 edges.angle, index, float(radius), float(tol), False)
-        share = float(np.mean(ids >= 0))
-        if NEAR <= share < EXACT:
-            out.append((theta, cx, cy))
+        out.append((float(np.mean(ids >= 0)), theta, cx, cy))
     return tuple(out)
+
+
+def pattern_turn_shares(pattern, config) -> tuple:
+    """:func:`turn_shares` of a :class:`~.pattern.Pattern` with ``config``
+    (cached on it; none for frames and lines): its sampled points against
+    all the edges they were taken from."""
+    if pattern.is_frame or pattern.is_line:
+        return ()
+
+    def shares():
+        f = pattern.features(1.0, config)
+        e = find_edge_points(compute_gradients(np.asarray(pattern._prepared(config), np.float32),
+                                               1.0, config.equalize), config.min_gradient)
+        if pattern._edge_mask is not None and len(e):
+            e = e.take(pattern._edge_mask[e.iy, e.ix])
+        return turn_shares(f.vx, f.vy, f.vangle, e, e.index_map(), pattern.origin,
+                           tol=math.radians(config.angle_tolerance))
+    key = ("turn shares",) + pattern._features_key(1.0, config) + (config.angle_tolerance,)
+    return pattern._cache.get_or_compute(key, shares)
+
+
+def symmetry_turn(shares) -> float:
+    """The least turn (degrees: 90 or 180) that maps the pattern onto itself
+    exactly (at least :data:`EXACT` of its points, :func:`turn_shares`'
+    ``shares``), or 360 when none does: its angle is known up to that turn.
+
+    >>> symmetry_turn(((0.2, math.pi / 2, 0, 0), (0.98, math.pi, 0, 0), (0.2, 1.5 * math.pi, 0, 0)))
+    180.0
+    >>> symmetry_turn(()), symmetry_turn(((0.97, math.pi / 2, 0, 0), (0.99, math.pi, 0, 0)))
+    (360.0, 90.0)
+    """
+    turns = [math.degrees(theta) for share, theta, _, _ in shares if share >= EXACT]
+    return float(round(min(turns))) if turns else 360.0
 
 
 def turn_pose(pose: Pose, theta: float, cx: float, cy: float) -> Pose:

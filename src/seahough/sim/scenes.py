@@ -43,8 +43,8 @@ def marker_scene(name: str = "board", shape: Shape = (480, 640), *,
     Background (:func:`background`), pose (:func:`random_pose`, the whole
     marker inside the frame, 4 px margin), paste with silt occlusion
     (:func:`paste_pattern`), then water (:func:`apply_water`).
-    :func:`negative_scene` with the same arguments gives the same background
-    and water without the marker.
+    :func:`negative_scene` with the same ``shape``, ``water``, ``seed`` and
+    ``source`` gives the same background and water without the marker.
 
     Parameters
     ----------

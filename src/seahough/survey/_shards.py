@@ -57,8 +57,9 @@ __all__ = ["SurveyFolder", "IMAGES_SCHEMA", "DETECTIONS_SCHEMA", "image_row", "F
 #: without either and is not continued; 3: detections get ``pattern``, the
 #: name of the pattern of a Detector of several; 4: images get ``left_out``
 #: and the best candidate not reported, ``best_score``, ``best_nfa``,
-#: ``declined``; 5: detections get ``segment``, a line's visible extent).
-FORMAT = 5
+#: ``declined``; 5: detections get ``segment``, a line's visible extent; 6:
+#: and ``stretches``, the stretches of it seen, and ``width``, its band's).
+FORMAT = 6
 MANIFEST = "survey.json"
 IMAGES = "images.parquet"
 DETECTIONS = "detections.parquet"
@@ -96,6 +97,8 @@ DETECTIONS_SCHEMA = pa.schema([
     ("flags", pa.list_(pa.string())),
     ("pattern", pa.string()),       # the pattern's name ("" for a Detector of one pattern)
     ("segment", pa.list_(pa.float64(), 4)),  # a line's visible extent: x0 y0 x1 y1 (else null)
+    ("stretches", pa.list_(pa.list_(pa.float64(), 4))),  # a line's stretches seen, each x0 y0 x1 y1
+    ("width", pa.float64()),        # a line's band width, px (else null)
 ])
 
 

@@ -244,7 +244,9 @@ def search_batch(batch: list, detector: Detector) -> tuple[list, list]:
             dets.append((index, None, rank, d.x, d.y, d.scale, d.angle, d.score, d.confidence,
                          nfa, m, float(d.votes), d.kind, d.line_angle, d.line_offset,
                          list(d.flags), d.pattern,
-                         None if d.segment is None else [float(v) for v in d.segment.ravel()]))
+                         None if d.segment is None else [float(v) for v in d.segment.ravel()],
+                         [[float(v) for v in st.ravel()] for st in d.stretches] if d.kind == "line"
+                         else None, d.to_dict().get("width")))
     return rows, dets
 
 
