@@ -349,6 +349,19 @@ def test_a_unit_float_frame_with_a_hot_pixel_is_still_read_as_one(monkeypatch):
     dark = np.zeros((100, 120), np.float32)
     dark[40:60, 40:80], dark[0, :4] = 1.0, 3.0          # (8-bit levels 0, 1 and 3)
     assert to_gray(dark).max() == 3.0
+    # a review: a 0-1 sonar fan whose outside is exactly 0 (most of the frame) with a
+    # hot pixel was still levels 0-3; a dark 16-bit frame with a bright rope, read
+    # once to levels under 1 of 255, was read as 0-1 the second time (the package
+    # reads its own float32 images again: find_curves)
+    rng = np.random.default_rng(0)
+    fan = np.zeros((240, 320), np.float32)
+    fan[:, 100:220] = rng.uniform(0.1, 0.9, (240, 120))
+    fan[5, 150] = 3.0
+    assert to_gray(fan).max() == 255.0
+    raw = rng.normal(120, 20, (240, 320)).clip(0, 65535).astype(np.uint16)
+    raw[115:122, :] = 6000
+    once = to_gray(raw)
+    assert np.median(once) < 1.0 and np.array_equal(to_gray(once), once)
 
 
 def test_a_dim_unit_float_image_is_said_with_its_file_name(tmp_path, monkeypatch, capsys):

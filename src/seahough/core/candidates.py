@@ -52,8 +52,10 @@ class Candidate:
     pattern: str = ""
     #: the working-scale pose in full-resolution pixels (ranking)
     placed: Pose | None = field(default=None, repr=False)
-    #: a line's stretches seen, once ranking looked (:func:`.lines.visible_stretches`)
+    #: a line's stretches seen, once ranking looked (``looked``; None: not measurable,
+    #: :func:`.lines.visible_stretches`)
     stretches: list | None = field(default=None, repr=False)
+    looked: bool = field(default=False, repr=False)
 
     @property
     def pose(self) -> Pose:

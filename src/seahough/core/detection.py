@@ -30,7 +30,8 @@ FLAG_RANGE_EDGE = "at_search_range_edge"
 #: Flags when the pattern looks the same turned by a half (a rectangle, an
 #: ellipse) or a quarter turn (a square): its angle is known up to that turn
 #: (a controller reading 179.5 then 0.5 degrees for a half turn of 1 degree
-#: should read them modulo 180). Not for discs and rings (any turn).
+#: should read them modulo 180). Not for discs and rings (any turn), nor
+#: when the searched angle range is narrower than the turn (it rules it out).
 FLAG_HALF_TURN = "same_turned_180"
 FLAG_QUARTER_TURN = "same_turned_90"
 #: Flag when a painted pattern searched in colour (``Config.colour`` None)
@@ -141,15 +142,18 @@ class Detection(ValueEquality):
              "nfa": self.nfa if math.isfinite(self.nfa) else None, "pattern": self.pattern}
         seg = None if self.segment is None else np.asarray(self.segment, float)
         pts = np.vstack(self.outline) if self.outline else None
+        width = n = None
         if self.kind == "line":
-            a = math.radians(self.line_angle)
-            n = np.array([math.sin(a), math.cos(a)])
-            width = None if pts is None else float(np.ptp(pts @ n))   # (the band's, in px)
+            if self.line_angle is not None:
+                a = math.radians(self.line_angle)
+                n = np.array([math.sin(a), math.cos(a)])
+            width = None if pts is None or n is None else float(np.ptp(pts @ n))   # (px)
             d.update(line_angle=self.line_angle, line_offset=self.line_offset, width=width,
                      segment=None if seg is None else seg.round(3).tolist(),
                      stretches=[np.asarray(st, float).round(3).tolist() for st in self.stretches])
         if self.outline:
-            if seg is not None:   # (the band there: the outline's length is the pattern's)
+            if seg is not None and width is not None:   # (the band there: the outline's
+                # length is the pattern's)
                 pts = np.vstack([seg - width / 2 * n, seg + width / 2 * n])
             d["box"] = [float(v) for v in (*pts.min(axis=0), *pts.max(axis=0))]
             d["outline"] = [np.asarray(o, float).round(3).tolist() for o in self.outline]

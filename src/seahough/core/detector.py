@@ -321,9 +321,9 @@ class Detector:
         angles = self._angles()
         # a pattern more than twice the image's diagonal at every searched scale is
         # not there (up to that, an object larger than the frame may be partly in
-        # view; a line's length, the stretch to match, must fit in it); larger
-        # scales than that are not searched (they would only size the accumulator)
-        fit = (1.0 if p.is_line else 2.0) * math.hypot(*gray.shape[:2]) / p.extent
+        # view: it is searched); larger scales than that are not searched (they
+        # would only size the accumulator)
+        fit = 2.0 * math.hypot(*gray.shape[:2]) / p.extent
         s1 = min(s1, max(fit, s0))
         if factor is None:
             factor = (features.gradients.factor if features is not None

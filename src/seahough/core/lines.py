@@ -43,8 +43,8 @@ _GAP_WIDTHS = 4.0
 
 def _line_extent(gray: np.ndarray, d, half: float, min_gradient: float):
     """The stretches along line detection ``d`` where the object is seen:
-    ``[(t0, t1), ...]`` in order, px along its direction from ``(d.x, d.y)``;
-    ``[]`` when none is found.
+    ``[(t0, t1), ...]`` in order, px along its direction from ``(d.x, d.y)``
+    (``[]``: none is seen; None: it cannot be measured).
 
     The grey image is sampled in a strip along the line (1 px along, 0.5 px
     across); a place along it holds the object when both of its borders
@@ -59,9 +59,11 @@ def _line_extent(gray: np.ndarray, d, half: float, min_gradient: float):
     within two widths hold it is hidden and parts it (a pipe seen over 330
     px, buried over 300 and seen again was one stretch across the burial:
     more of it lay beyond than the burial was long); beyond a gap from it,
-    another stretch of its own at least two gaps (or 5 % of the line) long
-    is seen too. A part shorter than two widths (or 3 % of the line) does
-    not count; together they must cover a tenth of the line's length.
+    another stretch of its own at least a gap (or 5 % of the line) long is
+    seen too. A part shorter than two widths (or 3 % of the line) does not
+    count; the first must cover a tenth of the line's length. None when
+    the extent cannot be measured (the line misses the image, its band has
+    no rows), ``[]`` when it was and nothing is seen.
 
     Examples
     --------
@@ -78,7 +80,7 @@ def _line_extent(gray: np.ndarray, d, half: float, min_gradient: float):
     h, w = gray.shape
     ends = _line_ends(d.x, d.y, d.line_angle, w, h)
     if ends is None:
-        return []
+        return None
     a = math.radians(d.line_angle)
     dx, dy = math.cos(a), -math.sin(a)
     nx, ny = math.sin(a), math.cos(a)
@@ -107,7 +109,7 @@ def _line_extent(gray: np.ndarray, d, half: float, min_gradient: float):
         rows = np.flatnonzero(np.abs(s - side) <= _BAND_TOL)
         rows = rows[(rows > 0) & (rows < s.size - 1)]
         if rows.size == 0:
-            return []
+            return None
         gs, gt = g_s[rows], g_t[rows]
         best = np.abs(gs).argmax(axis=0)
         col = np.arange(t.size)
@@ -128,8 +130,10 @@ def _line_extent(gray: np.ndarray, d, half: float, min_gradient: float):
         if hi - lo < 1 or not hit[lo:hi].any():
             continue
         i0, i1 = (lo + i for i in _best_run(np.where(hit[lo:hi], 1.0, -1.0)))
-        if not first and t[i1] - t[i0] < max(2.0 * gap, 0.05 * length):
+        if not first and t[i1] - t[i0] < max(gap, 0.05 * length):
             continue        # (beyond a gap: a stretch of its own, longer than chance's)
+        if first:
+            main = (float(t[i0]), float(t[i1]))
         first = False
         # a hidden stretch longer than the gap inside it parts it (it was crossed when
         # more of the object lay beyond it than it was long)
@@ -141,10 +145,11 @@ def _line_extent(gray: np.ndarray, d, half: float, min_gradient: float):
             if hit[j0] and t1 - t0 >= max(2.0 * width, 0.03 * length):
                 out.append((t0, t1))
         todo += [(lo, max(lo, i0 - int(gap))), (min(hi, i1 + int(gap) + 1), hi)]
-    out.sort()
-    if sum(t1 - t0 for t0, t1 in out) < 0.1 * length:
+    # (the stretch of most places seen must cover a tenth of the line on its own: chance
+    # stretches beyond gaps added up past it along a single straight edge)
+    if not out or main[1] - main[0] < 0.1 * length:
         return []
-    return out
+    return sorted(out)
 
 
 def _runs(v: np.ndarray) -> list:
@@ -179,7 +184,8 @@ def visible_stretches(gray: np.ndarray, d, min_gradient: float) -> list:
     """The stretches of line detection ``d`` (its ``x, y, line_angle`` and
     ``outline``, the band's two borders) that grey image ``gray`` shows: each
     ``[[x0, y0], [x1, y1]]`` on the centre line, image pixels, in order along
-    it; ``[]`` when none is found (:func:`_line_extent`).
+    it; ``[]`` when none is seen, None when that cannot be measured (a band
+    under 2 px wide: its two borders are not told apart; :func:`_line_extent`).
 
     >>> import types
     >>> img = np.full((100, 200), 40, np.float32)
@@ -193,11 +199,13 @@ def visible_stretches(gray: np.ndarray, d, min_gradient: float) -> list:
     borders = [np.asarray(o, float).reshape(-1, 2) for o in d.outline]
     borders = [o[0] for o in borders if len(o) >= 2]
     if len(borders) < 2 or d.line_angle is None:
-        return []
+        return None
     a = math.radians(d.line_angle)
     dv, nv = np.array([math.cos(a), -math.sin(a)]), np.array([math.sin(a), math.cos(a)])
     half = 0.5 * abs(float(np.dot(borders[0] - borders[1], nv)))
-    ext = _line_extent(gray, d, half, min_gradient) if half >= 1.0 else []
+    ext = _line_extent(gray, d, half, min_gradient) if half >= 1.0 else None
+    if ext is None:
+        return None
     p = np.array([d.x, d.y])
     return [np.array([p + t0 * dv, p + t1 * dv]) for t0, t1 in ext]
 
@@ -216,4 +224,4 @@ def visible_segment(gray: np.ndarray, d, min_gradient: float):
     [[29.5, 50.0], [119.5, 50.0]]
     """
     st = visible_stretches(gray, d, min_gradient)
-    return np.array([st[0][0], st[-1][1]]) if st else None
+    return np.array([st[0][0], st[-1][1]]) if st else None   # (none, or not measured)

@@ -342,6 +342,7 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
         if ctx.pattern.is_line and ctx.line_extent and _line_unseen(ctx, c, gray):
             c.declined = ("no stretch of it where both of its borders are seen (one edge, or "
                           "texture, along the band)")
+            other_object.append(c)   # (no rival: not the object's kind)
             continue
         if _unseen_hole(ctx, c):
             c.declined = (f"its hole is not in the image (hole support under "
@@ -374,12 +375,12 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
 
 
 def _line_unseen(ctx: SearchContext, c: Candidate, gray) -> bool:
-    """Whether line candidate ``c`` has no visible extent (:func:`.lines.visible_segment`):
+    """Whether line candidate ``c`` has no visible extent (:func:`.lines.visible_stretches`):
     no stretch where both borders of its band are edges. Such bands were 47 of 126
-    false gate posts of RoboSub's tune part at the defaults (2 of 28 right ones)."""
-    d = to_detection(ctx, c, 1.0, gray)
-    c.stretches = d.stretches
-    return d.segment is None
+    false gate posts of RoboSub's tune part at the defaults (2 of 28 right ones). A
+    band too thin to tell its borders apart (under 2 px) is not judged so."""
+    to_detection(ctx, c, 1.0, gray)
+    return c.stretches is not None and len(c.stretches) == 0
 
 
 def _copy_of(ctx: SearchContext, c: Candidate, twin: Candidate) -> bool:
@@ -447,9 +448,11 @@ def to_detection(ctx: SearchContext, c: Candidate, conf: float, gray) -> Detecti
     if conf < 0.2:
         flags.append(FLAG_AMBIGUOUS)
     flags += [FLAG_ALONG_LINE] if p.is_line else []
-    if p.kind not in ("circle", "ring"):     # (the same at any turn: no angle to tell)
+    span = ctx.angle_range[1] - ctx.angle_range[0]    # (a narrower range rules the turn out)
+    if p.kind not in ("circle", "ring") and span >= 90.0:   # (a disc: no angle to tell)
         turn = symmetry_turn(pattern_turn_shares(p, ctx.config))
-        flags += {90.0: [FLAG_QUARTER_TURN], 180.0: [FLAG_HALF_TURN]}.get(turn, [])
+        flags += {90.0: [FLAG_QUARTER_TURN], 180.0: [FLAG_HALF_TURN]}.get(turn, []) \
+            if span >= turn else []
     if ctx.compare.outside_ranges(s, a):
         flags.append(FLAG_OUTSIDE_RANGE)
     elif ctx.compare.at_range_edge(s, a):
@@ -457,8 +460,11 @@ def to_detection(ctx: SearchContext, c: Candidate, conf: float, gray) -> Detecti
     det = Detection(float(x), float(y), float(s), float(a), float(c.full.score), conf,
                     m, outline, c.votes, kind, la, lo, tuple(flags), c.evidence.nfa)
     if p.is_line:   # (in a colour search's BGR image, its grey copy's; once)
-        st = c.stretches if c.stretches is not None else visible_stretches(
-            gray if gray.ndim == 2 else cv2.cvtColor(np.ascontiguousarray(gray),
-                                                     cv2.COLOR_BGR2GRAY), det, ctx.config.min_gradient)
+        if not c.looked:   # (None: not measurable, a band under 2 px)
+            c.stretches, c.looked = visible_stretches(
+                gray if gray.ndim == 2 else cv2.cvtColor(np.ascontiguousarray(gray),
+                                                         cv2.COLOR_BGR2GRAY), det,
+                ctx.config.min_gradient), True
+        st = c.stretches or []
         det.stretches, det.segment = st, (np.array([st[0][0], st[-1][1]]) if st else None)
     return det

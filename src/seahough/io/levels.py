@@ -19,13 +19,16 @@ from ..errors import BitDepthWarning, LevelsWarning, warn_at_caller
 #: Float images in [0, 1] are scaled to 0-255; so are those within 1 of it (up
 #: to :data:`OVERSHOOT`) with at most :data:`OVERSHOOT_SHARE` of their values
 #: outside it, not whole numbers (colour correction's overshoot: saturated;
-#: whole numbers are a dark 8-bit frame's levels), and those with at most that
-#: share over it, however far, when most of their values lie between 0 and 1
-#: (a hot pixel, a glint: one pixel at 3 made a 0-1 frame levels 0-3 of 255,
-#: "not found" without a word). Values over 1 saturate, as 1 does. Others are
-#: levels 0-255.
+#: whole numbers are a dark 8-bit frame's levels), and those with a few hot
+#: pixels far over it (at most :data:`HOT_SHARE` of the values, or 16) when
+#: most of their values that are not 0 lie between 0 and 1 (a glint: one
+#: pixel at 3 made a 0-1 frame levels 0-3 of 255, "not found" without a
+#: word). A rope or a lit patch is more than a few pixels: a dark frame of
+#: levels 0-255 with one is not taken for 0-1, nor read so twice. Values over
+#: 1 saturate, as 1 does. Others are levels 0-255.
 OVERSHOOT = 2.0
 OVERSHOOT_SHARE = 0.05
+HOT_SHARE = 0.001
 
 
 def _unit_levels(a: np.ndarray, lo: float, hi: float) -> bool:
@@ -46,12 +49,20 @@ def _unit_levels(a: np.ndarray, lo: float, hi: float) -> bool:
         return False
     if lo >= 0.0 and hi <= 1.0:
         return True
-    out = a[(a > 1.0) | (a < 0.0)]
-    if out.size > OVERSHOOT_SHARE * a.size:
+    flat = a.reshape(-1)
+    # (levels 0-255, the usual case: most values over 1, seen in a sample, no copy)
+    step = max(1, flat.size // 4096)
+    if np.count_nonzero(flat[::step] > 1.0) > 2 * OVERSHOOT_SHARE * flat[::step].size:
+        return False
+    n_out = np.count_nonzero((a > 1.0) | (a < 0.0))
+    if n_out > OVERSHOOT_SHARE * a.size:
         return False
     if hi <= OVERSHOOT:
+        out = a[(a > 1.0) | (a < 0.0)]
         return bool(np.any(out != np.round(out)))
-    return bool(np.count_nonzero((a > 0.0) & (a < 1.0)) >= 0.5 * a.size)
+    if np.count_nonzero(a > OVERSHOOT) > max(16, HOT_SHARE * a.size):
+        return False
+    return bool(np.count_nonzero((a > 0.0) & (a < 1.0)) >= 0.5 * np.count_nonzero(a))
 
 
 #: The kinds of float levels :class:`~seahough.errors.LevelsWarning` was given for.

@@ -194,7 +194,8 @@ class Odometer:
         over its rate; a second video's times started at 0 again, and a
         velocity across the change was wrong)."""
         path, k = split_video_ref(name)
-        run = self._video
+        run = getattr(self, "_video", None)   # (an Odometer pickled before it had one: none)
+        self._video_t0 = getattr(self, "_video_t0", 0.0)
         if run is not None and run[0] != path:
             self._video_t0 += reader._video_length(*run)
             run = None

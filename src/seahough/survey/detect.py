@@ -245,8 +245,8 @@ def search_batch(batch: list, detector: Detector) -> tuple[list, list]:
                          nfa, m, float(d.votes), d.kind, d.line_angle, d.line_offset,
                          list(d.flags), d.pattern,
                          None if d.segment is None else [float(v) for v in d.segment.ravel()],
-                         [[float(v) for v in st.ravel()] for st in d.stretches] if d.kind == "line"
-                         else None, d.to_dict().get("width")))
+                         *(([[float(v) for v in st.ravel()] for st in d.stretches],
+                             d.to_dict().get("width")) if d.kind == "line" else (None, None))))
     return rows, dets
 
 

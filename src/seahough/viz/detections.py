@@ -118,9 +118,8 @@ def detections_size(shape, *, max_width=None) -> tuple[int, int]:
 def _draw_line(ax, d, colour, gray, w, h):
     """Draw line detection ``d``: each stretch seen along the object (its
     ``stretches``, its ``segment``, or :func:`~.core.lines.visible_segment`) as
-    its two borders closed at the ends, and return the ends of its extent
-    ``[[x0, y0], [x1, y1]]``; or, when none is found, its borders across the
-    image (None)."""
+    its two borders closed at the ends, and return them, ``(k, 2, 2)``; or,
+    when none is found, its borders across the image (None)."""
     borders = [np.asarray(o, float).reshape(-1, 2) for o in d.outline]
     borders = [o[0] for o in borders if len(o) >= 2]
     a = math.radians(d.line_angle)
@@ -139,19 +138,20 @@ def _draw_line(ax, d, colour, gray, w, h):
                 ax.plot([e[0][0], e[1][0]], [e[0][1], e[1][1]], color=colour, lw=1.8,
                         path_effects=_OUTLINE)
         return None
-    ends = np.asarray(seg, float)
-    for a0, a1 in getattr(d, "stretches", None) or [ends]:   # (a buried stretch: a gap)
+    parts = np.asarray(getattr(d, "stretches", None) or [seg], float)   # (buried: gaps)
+    for a0, a1 in parts:
         band = np.array([a0 - half * nv, a1 - half * nv, a1 + half * nv, a0 + half * nv, a0 - half * nv])
         ax.plot(band[:, 0], band[:, 1], color=colour, lw=1.8, path_effects=_OUTLINE)
-    return ends
+    return parts
 
 
-def _nearest_on(seg, x, y) -> tuple[float, float]:
-    """The point of segment ``seg`` (its two ends) nearest ``(x, y)``."""
-    a, b = seg
-    ab = b - a
-    u = float(np.clip(np.dot((x, y) - a, ab) / max(np.dot(ab, ab), 1e-12), 0.0, 1.0))
-    q = a + u * ab
+def _nearest_on(parts, x, y) -> tuple[float, float]:
+    """The point of the segments ``parts`` (each its two ends) nearest ``(x, y)``."""
+    qs = []
+    for a, b in np.asarray(parts, float).reshape(-1, 2, 2):
+        ab = b - a
+        qs.append(a + float(np.clip(np.dot((x, y) - a, ab) / max(np.dot(ab, ab), 1e-12), 0, 1)) * ab)
+    q = min(qs, key=lambda q: float(np.hypot(*(q - (x, y)))))
     return float(q[0]), float(q[1])
 
 
@@ -572,7 +572,7 @@ def plot_detections(image, detections, path=None, *, pattern=None, title=None,
         ax.plot([cx], [cy], marker="+", ms=_cross_size(ax, d, is_line, (w, h), (iw, ih)),
                 mew=2.5, color=c, path_effects=_OUTLINE)
         if seg is not None:                 # its label on the segment, nearest the centre
-            anchors.append(seg)
+            anchors.append(seg.reshape(-1, 2))
             lx, ly = _nearest_on(seg, d.x, d.y)
         elif is_line:                       # at the point nearest the centre
             anchors.append(np.array([[d.x, d.y]]))
