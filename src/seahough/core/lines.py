@@ -124,17 +124,15 @@ def _line_extent(gray: np.ndarray, d, half: float, min_gradient: float):
     win = max(3, int(round(2.0 * width)) | 1)         # (odd)
     seen = cv2.blur(hit.astype(np.float32)[None, :], (win, 1),
                     borderType=cv2.BORDER_CONSTANT)[0] >= 0.5
-    out, todo, first = [], [(0, t.size)], True
+    out, todo, main = [], [(0, t.size)], None
     while todo:     # the stretch with most more places seen than not, then beyond its gaps
         lo, hi = todo.pop()
         if hi - lo < 1 or not hit[lo:hi].any():
             continue
         i0, i1 = (lo + i for i in _best_run(np.where(hit[lo:hi], 1.0, -1.0)))
-        if not first and t[i1] - t[i0] < max(gap, 0.05 * length):
+        if main is not None and t[i1] - t[i0] < max(gap, 0.05 * length):
             continue        # (beyond a gap: a stretch of its own, longer than chance's)
-        if first:
-            main = (float(t[i0]), float(t[i1]))
-        first = False
+        main = main or (float(t[i0]), float(t[i1]))
         # a hidden stretch longer than the gap inside it parts it (it was crossed when
         # more of the object lay beyond it than it was long)
         cuts = [(a, b) for a, b in _runs(~seen[i0:i1 + 1]) if t[b] - t[a] >= gap]
@@ -147,7 +145,7 @@ def _line_extent(gray: np.ndarray, d, half: float, min_gradient: float):
         todo += [(lo, max(lo, i0 - int(gap))), (min(hi, i1 + int(gap) + 1), hi)]
     # (the stretch of most places seen must cover a tenth of the line on its own: chance
     # stretches beyond gaps added up past it along a single straight edge)
-    if not out or main[1] - main[0] < 0.1 * length:
+    if main is None or not out or main[1] - main[0] < 0.1 * length:
         return []
     return sorted(out)
 
