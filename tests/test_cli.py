@@ -1390,3 +1390,31 @@ def test_the_table_of_several_patterns_gives_a_lines_offset():
     col = head.index("offset")
     assert rows[0][col] in ("-12.50", "12.50") and rows[1][col] == "-", (head, rows)
     assert "offset" not in " ".join(_detection_lines([joint]))
+
+
+def test_the_edges_picture_of_several_patterns_shows_each_patterns_features(tmp_path, monkeypatch):
+    """With several patterns searched at different working scales, the edges
+    picture shows each scale's key points, one under the other, naming its
+    patterns (a trial debugged a post "not found" on the buoy's features: the
+    picture named no pattern)."""
+    from seahough import viz
+    from seahough.cli import detect as D
+    from seahough.cli._common import make_detector
+
+    img, _ = sim.rope_scene(width=8, water="moderate", seed=5, source="procedural")
+    det = make_detector("buoy=circle:6+rope=line:200,8+post=line:150,8", (0.5, 2.0),
+                        (0.0, 180.0), 1, 0.5, 0.0, None, None, False, None, None)
+    res = det.search(img)
+    by = {n: r.features for n, r in res.parts.items()}
+    assert by["buoy"] is not by["rope"] and by["rope"] is by["post"]   # (two scales)
+    seen = []
+    draw = viz.plot_edges
+    monkeypatch.setattr(viz, "plot_edges", lambda image, feats, path, title=None:
+                        seen.append((feats, title)) or draw(image, feats, path, title=title))
+    written = {}
+    D._pictures("rope.png", img, res, det, None, tmp_path / "rope",
+                D.Drawing(kinds=("edges",)), written)
+    assert [(f, t) for f, t in seen] == [
+        (by["buoy"], "rope.png: what the detector sees; pattern buoy"),
+        (by["rope"], "rope.png: what the detector sees; patterns rope, post")]
+    assert cv2.imread(written["edges"]).shape == (2 * 560, 1300, 3)

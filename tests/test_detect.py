@@ -798,7 +798,7 @@ def test_a_candidate_under_min_score_says_its_nfa_fails_too():
     under = [c for c in res.candidates if "under min_score 0.6" in c.declined]
     assert under and res.detections == []
     for c in under:
-        assert c.declined.endswith(f"; NFA {c.nfa:.3g} over max_nfa 1 too"), c.declined
+        assert f"; NFA {c.nfa:.3g} over max_nfa 1 too" in c.declined, c.declined
     assert _option_hint(under[0]) == " (options --min-score and --max-nfa)"
 
 
@@ -972,3 +972,18 @@ def test_the_line_rules_hold_for_thin_lines_equal_stretches_and_edges_beside(tmp
     assert len(res.detections) == 1 and abs(res.detections[0].y - 66.5) < 1.5
     assert res.detections[0].confidence > 0.65, [(c.work_score, c.declined)
                                                  for c in res.candidates]   # (0.46 before)
+
+
+def test_a_declined_pose_outside_the_ranges_searched_says_so():
+    # a 500 x 300 box searched at 0.5-2 in a 160 x 120 photo: its best
+    # candidates sat at scale 0.44 (the slack past the range), their reason
+    # only "score ... under ...": a new user read them as searched
+    img = np.full((120, 160), 40, np.uint8)
+    img[20:100, 30:130] = 200
+    res = seahough.Detector(seahough.Pattern.rectangle(500, 300)).search(img)
+    assert not res.detections and res.candidates
+    for c in res.candidates:
+        outside = not 0.5 / 1.02 <= c.pose.scale <= 2.0 * 1.02
+        assert ("its scale" in c.declined and "outside the range searched (0.5-2)"
+                in c.declined) == outside, (c.pose.scale, c.declined)
+    assert any("outside the range searched" in c.declined for c in res.candidates)

@@ -124,8 +124,15 @@ def test_plot_edges(tmp_path, box_search):
     ax2, cax = fig.axes[1], fig.axes[2]
     bb = ax2.title.get_window_extent(fig.canvas.get_renderer())
     assert bb.x1 < cax.get_position().x0 * fig.bbox.width, bb
-    with pytest.raises(ValueError, match="features"):       # pictures never run the search
+    with pytest.raises(seahough.ParameterError, match="features"):   # pictures never run the search
         plot.plot_edges(img, None, tmp_path / "edges2.png")
+    # the whole result, or its planes, given for the features (or the other
+    # way round): a SeahoughError naming what to pass (an AttributeError
+    # 'SearchResult' object has no attribute 'xy': a new user's trial)
+    with pytest.raises(seahough.ParameterError, match=r"SearchResult\.features.*got SearchResult"):
+        plot.plot_edges(sea, res)
+    with pytest.raises(seahough.ParameterError, match=r"SearchResult\.planes.*got SearchResult"):
+        plot.plot_accumulator(res, res.detections)
 
 
 def test_plot_trajectory(tmp_path):
@@ -1096,3 +1103,20 @@ def test_no_data_beyond_a_sonar_fan_is_outlined_dashed():
     assert len(sets) == 1 and list(sets[0].levels) == [0.5]
     plain = plot.plot_detections(fan, res.detections).axes[0]
     assert not [c for c in plain.collections if hasattr(c, "levels")]
+
+
+@pytest.mark.parametrize("fx, fy", [(0.95, 0.5), (0.05, 0.02), (0.97, 0.98), (0.3, 0.5)])
+def test_a_declined_candidates_label_stays_in_its_panel(fx, fy):
+    # near the right edge the label ran into the colour bar, near the bottom
+    # under the axis ("(de|clined)": a new user's trial); it now goes left / up
+    from seahough.viz.accumulator import _side_label
+    from seahough.viz._figure import _figure
+
+    fig = _figure(1300, 560)
+    ax = fig.add_axes([0.06, 0.1, 0.36, 0.76])
+    ax.set_xlim(0, 360)
+    ax.set_ylim(0.5, 2.0)
+    _side_label(ax, "best candidate (declined)", 360 * fx, 0.5 + 1.5 * fy, -14)
+    r = fig.canvas.get_renderer()
+    box, panel = ax.texts[0].get_window_extent(r), ax.get_window_extent(r)
+    assert panel.x0 <= box.x0 and box.x1 <= panel.x1 and panel.y0 <= box.y0 and box.y1 <= panel.y1

@@ -281,17 +281,47 @@ def shift_origin(matrix, ox: float, oy: float) -> np.ndarray:
     return np.hstack([m[:, :2], t[:, None]])
 
 
-def overlap(matrix, width: int, height: int, n: int = 24) -> float:
-    """Share of a ``width`` x ``height`` frame that ``matrix`` maps inside an
-    equally sized frame (sampled on an ``n`` x ``n`` grid).
+def _clip_area(poly: np.ndarray, x0: float, y0: float, x1: float, y1: float) -> float:
+    """Area of a convex polygon (K, 2) clipped to the box ``x0..x1, y0..y1``
+    (Sutherland-Hodgman, one box side at a time)."""
+    pts = [tuple(p) for p in poly]
+    for axis, bound, keep_low in ((0, x0, False), (0, x1, True), (1, y0, False), (1, y1, True)):
+        out = []
+        for k, p in enumerate(pts):
+            q = pts[k - 1]
+            p_in = p[axis] <= bound if keep_low else p[axis] >= bound
+            q_in = q[axis] <= bound if keep_low else q[axis] >= bound
+            if p_in != q_in:
+                t = (bound - q[axis]) / (p[axis] - q[axis])
+                out.append((q[0] + t * (p[0] - q[0]), q[1] + t * (p[1] - q[1])))
+            if p_in:
+                out.append(p)
+        pts = out
+        if not pts:
+            return 0.0
+    x, y = np.array(pts).T
+    return 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
 
-    >>> overlap([[1, 0, 0], [0, 1, 0]], 64, 48), overlap([[1, 0, 32], [0, 1, 0]], 65, 48)
+
+def overlap(matrix, width: int, height: int) -> float:
+    """Share of a ``width`` x ``height`` frame that the 2x3 ``matrix`` maps
+    inside an equally sized frame (exact: the mapped frame clipped to the
+    frame, over its area; a frame covers ``-0.5 .. width - 0.5``).
+
+    >>> overlap([[1, 0, 0], [0, 1, 0]], 64, 48), overlap([[1, 0, 32], [0, 1, 0]], 64, 48)
     (1.0, 0.5)
+    >>> overlap([[1, 0, 1e-9], [0, 1, 1e-9]], 384, 288), overlap([[1, 0, 6], [0, 1, 0]], 384, 288)
+    (1.0, 0.984375)
     """
-    xs, ys = np.meshgrid(np.linspace(0, width - 1, n), np.linspace(0, height - 1, n))
-    p = apply_matrix(matrix, np.stack([xs.ravel(), ys.ravel()], 1))
-    return float(np.mean((p[:, 0] >= 0) & (p[:, 1] >= 0) & (p[:, 0] <= width - 1)
-                         & (p[:, 1] <= height - 1)))
+    m = np.asarray(matrix, dtype=float)
+    det = abs(float(np.linalg.det(m[:2, :2])))
+    if not det > 0 or width <= 0 or height <= 0:
+        return 0.0
+    x0, y0, x1, y1 = -0.5, -0.5, width - 0.5, height - 0.5
+    quad = apply_matrix(m, [[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+    if not np.isfinite(quad).all():
+        return 0.0
+    return round(min(1.0, _clip_area(quad, x0, y0, x1, y1) / (det * width * height)), 9)
 
 
 def corner_gap(a, b, shape) -> float:
@@ -423,9 +453,9 @@ class Similarity:
         x, y = self.map(p[:, 0], p[:, 1])
         return np.stack([x, y], 1)
 
-    def overlap(self, width: int, height: int, n: int = 24) -> float:
+    def overlap(self, width: int, height: int) -> float:
         """See :func:`overlap`."""
-        return overlap(self.matrix, width, height, n)
+        return overlap(self.matrix, width, height)
 
     # ------------------------------------------------------------------ algebra
     def _complex(self) -> tuple[complex, complex]:

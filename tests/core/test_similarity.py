@@ -87,22 +87,26 @@ def test_shifted_is_the_same_transform_about_another_origin():
 
 @pytest.mark.parametrize("s, want", [
     (Similarity.identity(), 1.0),
-    (Similarity(1.0, 0.0, 2.0, 0.0), 3 / 5),          # x + 2 <= 4: x in {0, 1, 2}
-    (Similarity(1.0, 0.0, 2.0, -1.0), 3 / 5 * 4 / 5),  # and y - 1 >= 0: y in {1..4}
-    (Similarity(2.0, 0.0, 0.0, 0.0), 3 / 5 * 3 / 5),   # 2x <= 4 and 2y <= 4
+    (Similarity(1.0, 0.0, 1e-9, -1e-9), 1.0),         # a hair off is the same frame
+    (Similarity(1.0, 0.0, 2.0, 0.0), 3 / 5),          # [-0.5, 4.5] moved 2 right
+    (Similarity(1.0, 0.0, 2.0, -1.0), 3 / 5 * 4 / 5),  # and 1 up
+    (Similarity(2.0, 0.0, 0.0, 0.0), 1 / 2 * 1 / 2),   # [-1, 9] of [-0.5, 4.5] on each axis
     (Similarity(-1.0, 0.0, 4.0, 4.0), 1.0),           # half a turn about the centre
     (Similarity(1.0, 0.0, 5.0, 0.0), 0.0),            # moved off the frame
     (Similarity(0.0, 1.0, 0.0, 4.0), 1.0),            # a quarter turn of a square
+    (Similarity(1.0, 0.0, 0.3, 0.0), 1 - 0.3 / 5),    # exact, not counted on a grid
 ])
-def test_overlap_on_a_5_by_5_grid(s, want):
-    # width = height = n = 5: the samples are the pixels 0..4 themselves
-    assert overlap(s.matrix, 5, 5, n=5) == pytest.approx(want, abs=1e-12)
-    assert s.overlap(5, 5, n=5) == pytest.approx(want, abs=1e-12)
+def test_overlap_of_a_5_by_5_frame(s, want):
+    # a frame covers -0.5 .. 4.5: the share of it mapped inside, exactly (a
+    # grid of samples on the border pixels gave 0.918 for the same frame
+    # moved 1e-9 px: a new user's trial)
+    assert overlap(s.matrix, 5, 5) == pytest.approx(want, abs=1e-9)
+    assert s.overlap(5, 5) == pytest.approx(want, abs=1e-9)
 
 
 def test_overlap_of_half_a_frame():
-    # 24 samples over 0..64 (2.78 px apart): 12 of them at x <= 32 stay inside
-    assert overlap([[1, 0, 32], [0, 1, 0]], 65, 48) == 0.5
+    assert overlap([[1, 0, 32], [0, 1, 0]], 64, 48) == 0.5
+    assert overlap([[1, 0, 32], [0, 1, 0]], 65, 48) == pytest.approx(33 / 65)
 
 
 @pytest.mark.parametrize("angle, kw, want", [

@@ -208,26 +208,20 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, draw: Dr
                              bit_depth=detector.config.bit_depth, blanks=res.blanks,
                              patterns=names)
         written["overlay"] = str(ov)
-    feats = res.features
     acc_title = f"{Path(name).name}: accumulator"
-    searcher = detector
-    if detector.parts:   # the edges: the best detection's pattern's (else the first's)
-        which = dets[0].pattern if dets else next(iter(detector.parts))
-        searcher = detector.parts[which]
-        part = res.parts.get(which) if res.parts else None
-        if part is not None:
-            feats = part.features
     # (a colour search's edges come from the channels, its working image is grey:
     # a colour trial read the left panel as what was searched)
+    searcher = detector.parts[dets[0].pattern if dets else next(iter(detector.parts))] \
+        if detector.parts else detector
     in_colour = (img.ndim == 3 and bool(searcher.config.colour)
                  and not any(FLAG_GREY in d.flags for d in dets))
+    from ..viz._figure import stack_figures
+
     if "accumulator" in kinds:
         ac = Path(f"{base}_accumulator.png")
         if detector.parts and res.parts:
             # each pattern's planes, one under the other (its detections numbered in
             # the whole list)
-            from ..viz._figure import stack_figures
-
             stack_figures([plot.plot_accumulator(r.planes, dets, None, note=r.note,
                                                  title=f"{acc_title} of pattern {n}",
                                                  patterns=names, best=best_declined(r))
@@ -239,7 +233,14 @@ def _pictures(name: str, img, res, detector: Detector, pat, base: Path, draw: Dr
     if "edges" in kinds:
         ed = Path(f"{base}_edges.png")
         how = " (edges from the colour channels; left, its grey levels)" if in_colour else ""
-        plot.plot_edges(img, feats, ed, title=f"{Path(name).name}: what the detector sees{how}")
+        head = f"{Path(name).name}: what the detector sees{how}"
+        seen = {}   # (several patterns: each working scale's features, one under the other,
+        for n, r in (res.parts or {}).items():    # naming its patterns: a trial debugged a
+            if r.features is not None:            # post's search on the buoy's)
+                seen.setdefault(id(r.features), (r.features, []))[1].append(n)
+        figs = [plot.plot_edges(img, f, None, title=f"{head}; pattern{'s' * (len(ns) > 1)} "
+                                f"{', '.join(ns)}") for f, ns in seen.values()]
+        stack_figures(figs, ed) if figs else plot.plot_edges(img, res.features, ed, title=head)
         written["edges"] = str(ed)
 
 

@@ -14,7 +14,7 @@ import cv2
 import numpy as np
 
 from . import kernels as K
-from ..geometry import angle_difference, apply_matrix, line_parameters, pose_to_matrix
+from ..geometry import angle_difference, apply_matrix, line_parameters, pose_to_matrix, wrap_angle
 from .candidates import Candidate, SearchContext, icp_subset
 from .detection import (FLAG_ALONG_LINE, FLAG_AMBIGUOUS, FLAG_GREY, FLAG_HALF_TURN,  # noqa: F401
                         FLAG_OUTSIDE_RANGE, FLAG_PARTIAL, FLAG_QUARTER_TURN, FLAG_RANGE_EDGE,
@@ -370,6 +370,16 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
                           "coarse)")
             continue
         dets.append(to_detection(ctx, c, conf, gray))
+    a0, a1 = ctx.angle_range
+    for c in cands:   # (a declined pose in the slack past the ranges says so, as a
+        q = c.pose    # detection's flag does: 0.446 of 0.5-2 read as searched, a trial)
+        said = c.declined.startswith(("scale ", "the same object")) or "range searched" in c.declined
+        if (c.declined and not said and all(map(math.isfinite, (q.scale, q.angle)))
+                and ctx.compare.outside_ranges(q.scale, q.angle)):
+            c.declined += (f"; its scale {q.scale:.3g} is outside the range searched "
+                           f"({s0:.3g}-{s1:.3g})" if not s0 / 1.02 <= q.scale <= s1 * 1.02 else
+                           f"; its angle {wrap_angle(q.angle):.1f} is outside the range "
+                           f"searched ({a0:g}-{a1:g})")
     dets.sort(key=lambda d: -d.score)
     return dets
 

@@ -8,6 +8,7 @@ import math
 import numpy as np
 from matplotlib.figure import Figure
 
+from ..errors import ParameterError
 from ..geometry import wrap_angle
 from ._figure import _TEXT_OUTLINE, _figure, _finish
 from .detections import colours
@@ -201,6 +202,12 @@ def plot_accumulator(planes, detections=(), path=None, *, title=None, note=None,
     matplotlib.figure.Figure
         1300 x 560 px.
 
+    Raises
+    ------
+    ParameterError
+        When ``planes`` is not a search's planes (e.g. the whole
+        ``SearchResult``: pass ``result.planes``).
+
     Examples
     --------
     Two boxes: two peaks, ringed and numbered #1 and #2 in both planes.
@@ -221,6 +228,9 @@ def plot_accumulator(planes, detections=(), path=None, *, title=None, note=None,
     >>> fig.axes[0].texts[0].get_text()
     'no accumulator: pattern larger than the image'
     """
+    if planes is not None and not hasattr(planes, "scale_angle"):
+        raise ParameterError("plot_accumulator needs the search's accumulator planes "
+                             f"(SearchResult.planes), got {type(planes).__name__}")
     fig = _figure(1300, 560)
     detections = list(detections or [])
     if title:
@@ -280,20 +290,31 @@ def plot_accumulator(planes, detections=(), path=None, *, title=None, note=None,
     if not shown and xy.size and xy.max() > 0:
         r, c = np.unravel_index(int(np.argmax(xy)), xy.shape)
         ax1.plot([planes.x[c]], [planes.y[r]], "x", ms=14, mew=2.5, color="white")
-        ax1.annotate("highest vote" if best is not None else "highest peak (rejected)",
-                     (planes.x[c], planes.y[r]), xytext=(10, 8),
-                     textcoords="offset points", color="white", fontsize=10,
-                     path_effects=_TEXT_OUTLINE)
+        _side_label(ax1, "highest vote" if best is not None else "highest peak (rejected)",
+                    planes.x[c], planes.y[r], 8)
         k, j = np.unravel_index(int(np.argmax(sa)), sa.shape)
-        ax2.plot([ang[j]], [planes.scales[k]], "x", ms=14, mew=2.5, color="white", clip_on=False)
+        # (over a ring in the same cell: a trial could not see it under one)
+        ax2.plot([ang[j]], [planes.scales[k]], "x", ms=14, mew=2.5, color="white", clip_on=False,
+                 zorder=6)
     if not shown and best is not None:   # (the refined candidate the table reports)
         q = best.pose
         a, sc = scale_angle_marker(planes, q.scale, q.angle)
         for ax, px, py in ((ax1, q.tx, q.ty), (ax2, a, sc)):
             ax.plot([px], [py], "o", ms=18, mfc="none", mec="white", mew=1.8, ls="none",
                     clip_on=False)
-            ax.annotate("best candidate (declined)", (px, py), xytext=(10, -14),
-                        textcoords="offset points", color="white", fontsize=10,
-                        path_effects=_TEXT_OUTLINE)
+            _side_label(ax, "best candidate (declined)", px, py, -14)
     return _finish(fig, path)
+
+
+def _side_label(ax, text, px, py, dy):
+    """A white label beside the marker at ``(px, py)``, ``dy`` points above
+    it (below if negative): to its left in the right half of the panel,
+    above it near the bottom and below near the top (it ran into the
+    colour bar or under the axis: a trial read "(de|clined)")."""
+    fx, fy = ax.transAxes.inverted().transform(ax.transData.transform((px, py)))
+    right = fx > 0.55
+    dy = abs(dy) if fy < 0.12 else -abs(dy) if fy > 0.9 else dy
+    ax.annotate(text, (px, py), xytext=(-12 if right else 10, dy), textcoords="offset points",
+                ha="right" if right else "left", color="white", fontsize=10,
+                path_effects=_TEXT_OUTLINE, annotation_clip=False, zorder=7)
 

@@ -8,6 +8,7 @@ import numpy as np
 from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 
+from ..errors import ParameterError
 from ._figure import _figure, _finish, _imshow
 
 
@@ -44,8 +45,9 @@ def plot_edges(image, features, path=None, *, title=None) -> Figure:
 
     Raises
     ------
-    ValueError
-        When ``features`` is None: the picture never runs the search.
+    ParameterError
+        When ``features`` is None or not a search's features: the picture
+        never runs the search.
 
     Examples
     --------
@@ -64,10 +66,11 @@ def plot_edges(image, features, path=None, *, title=None) -> Figure:
     >>> plot_edges(disc, None)
     Traceback (most recent call last):
     ...
-    ValueError: plot_edges needs the search's features (SearchResult.features)
+    seahough.errors.ParameterError: plot_edges needs the search's features (SearchResult.features), got NoneType
     """
-    if features is None:
-        raise ValueError("plot_edges needs the search's features (SearchResult.features)")
+    if getattr(features, "gradients", None) is None:
+        raise ParameterError("plot_edges needs the search's features (SearchResult.features), "
+                             f"got {type(features).__name__}")
     g = features.gradients
     mag = np.asarray(g.magnitude, float)
     h, w = mag.shape
