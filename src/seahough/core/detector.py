@@ -37,11 +37,9 @@ __all__ = ["Detector", "SearchResult", "SEARCH_NOTES", "Detection", "confidence"
 
 #: A texture pattern small in a large image: the key points taken put this
 #: many times its own voting points on its area (``Detector._n_keypoints``)
-#: ... (0.5 of 128 voting points until ``Config.n_pattern_points`` became
-#: 256: 0.25 of them takes as many key points as before, so that the voting
-#: cost, pattern points x key points, doubles rather than quadruples). The
-#: count follows ``Config.n_pattern_points``: a Config with 128 of them now
-#: takes half the key points it took with 128 before.
+#: ... (0.5 of 128 voting points until ``Config.n_pattern_points`` became 256:
+#: 0.25 of them takes as many key points as before, and the voting cost doubles
+#: rather than quadruples; a Config with 128 of them takes half as many).
 TEXTURE_DENSITY = 0.25
 #: ... up to this many (the voting cost grows with them), whenever the default
 #: puts fewer there; MIN_ON_PATTERN, if set, only under that many (16 until
@@ -66,23 +64,23 @@ class SearchResult:
     """Everything one search produced: the detections and how it got there.
 
     ``note`` says why a search stopped before voting (its detections are
-    then empty): one of :data:`SEARCH_NOTES`. ``planes`` and ``features``
+    then empty): one of :data:`SEARCH_NOTES`; ``planes`` and ``features``
     may then be None. ``candidates`` are the refined candidate poses
-    (:class:`~.candidates.Candidate`: ``pose``, ``score``, ``nfa``), in the
-    order of their working-scale score (the coarse one: the full-resolution
-    finish, which ranks the detections, may order them otherwise), at most
-    ``Config.n_candidates`` (7; ``max_results + 2`` when more; over 5 results,
-    every seed's) per pattern; one not reported says why in its ``declined``
-    (e.g. "NFA 1.08 over max_nfa 1", or a disc's pose for a ring: "its hole
-    is not in the image"). An object in view that is no candidate at all had
-    too few votes (``Config(n_candidates=30)`` may bring it in). For a
-    Detector of several patterns, ``parts`` holds each pattern's own result by name (``planes``
-    and ``features`` are then those of the best detection's pattern, or of
-    the first pattern when none is found; ``planes.pattern`` names it).
+    (:class:`~.candidates.Candidate`: ``pose``, ``score``, ``nfa``) in the
+    order of their working-scale score (the full-resolution finish, which
+    ranks the detections, may order them otherwise), at most
+    ``Config.n_candidates`` (7; ``max_results + 2`` when more; over 5
+    results, every seed's) per pattern; one not reported says why in its
+    ``declined`` ("NFA 1.08 over max_nfa 1"; a disc's pose for a ring: "its
+    hole is not in the image"). An object in view that is no candidate had
+    too few votes (``Config(n_candidates=30)`` may bring it in). Of several
+    patterns, ``parts`` holds each one's result by name (``planes`` and
+    ``features``: the best detection's pattern's, else the first's;
+    ``planes.pattern`` names it).
     ``blanks`` is what was filled in the image before the search
-    (:class:`~.blanks.Blanks`: its letterbox border, burned-in captions, the
-    regions of ``Config.ignore``, no data beyond the picture); None when it
-    was searched as given (features given, a frame pattern).
+    (:class:`~.blanks.Blanks`: letterbox border, burned-in captions,
+    ``Config.ignore``'s regions, no data beyond the picture); None when
+    searched as given (features given, a frame pattern).
     """
 
     detections: list
@@ -147,7 +145,8 @@ class Detector:
         that each object may have its own: counting 60 rings on a seabed
         photo found 31 with 1,200.
     min_score : float
-        A detection must have at least this share of the pattern's edges.
+        A detection must have at least this share of the pattern's edges (of
+        those in view when ``partly_outside_image``: its ``score`` is of all).
     min_confidence : float
         ... and at least this confidence.
     max_nfa : float

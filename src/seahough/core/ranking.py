@@ -266,6 +266,27 @@ def _best_full(ctx: SearchContext, c: Candidate, alts, gray, where) -> None:
 
 
 # ------------------------------------------------------------------- ranking
+#: The least share in view of a pose judged over its points in view
+#: (:func:`seen_score`): one mostly outside is judged over all its points (a
+#: 500 x 300 box's corner, 33 % in view, was a box at 0.44 of a 100 x 80 one).
+SEEN_FLOOR = 0.5
+
+
+def seen_score(ctx: SearchContext, fit: Fit) -> float:
+    """A fit's score over the pattern points in view, ``score / inside``,
+    for an object partly outside the image but at least :data:`SEEN_FLOOR`
+    in view; its score otherwise, and for a frame's or a line's pattern
+    (an overlap, a line's extent, measured their own way). Candidates are
+    ranked, and min_score judged, by it: a marker 40 % outside scored 0.50
+    (its outside points unmatched), a smaller copy turned 90 degrees in
+    its seen part 0.71 and was reported (a docking trial: 6 of 12 cut
+    rectangles). The chance of the points in view is the NFA's (over
+    those only)."""
+    if not SEEN_FLOOR <= fit.inside < 0.98 or ctx.pattern.is_frame or ctx.pattern.is_line:
+        return fit.score
+    return min(1.0, fit.score / fit.inside)
+
+
 def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: float) -> list:
     """Refine the promising candidates at full resolution, rank them by
     that score, keep the distinct ones and rate their confidence.
@@ -281,7 +302,8 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
     # pass min_score: a half-buried object is not judged against a clean one elsewhere
     share = 0.0 if ctx.counting else 0.6
     pre = max(0.85 * ctx.min_score, share * best)
-    todo = [c for c in cands if c.work_score >= pre]
+    seen = {id(c): seen_score(ctx, c.fit) for c in cands}   # (the working scale's)
+    todo = sorted((c for c in cands if seen[id(c)] >= pre), key=lambda c: -seen[id(c)])
     if ctx.counting:   # (those chance explains, judged at the working scale, go last:
         for c in todo:  # a sonar tile's speckle took every place from the rubble)
             judge(ctx, c)
@@ -289,7 +311,7 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
     todo = todo[: ctx.max_results + 2]
     for c in cands:
         c.placed = _full_pose(c.fit.pose, ctx.features)
-        if c.work_score < pre:   # (which bound: a user could not tell what to change)
+        if seen[id(c)] < pre:   # (which bound: a user could not tell what to change)
             bound = ("0.85 x min_score" if 0.85 * ctx.min_score >= share * best
                      else "0.6 x the best candidate's")
             c.declined = (f"score {c.work_score:.3g} (coarse, before the full-resolution "
@@ -308,15 +330,17 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
         _best_full(ctx, c, alt, gray, where)
     # rank by both scores: the working scale's is smoother (less pixel
     # noise, JPEG, snow), the full resolution's sharper
-    todo.sort(key=lambda c: -(c.full.score + c.work_score))
+    todo.sort(key=lambda c: -(seen_score(ctx, c.full) + seen_score(ctx, c.fit)))
     accepted: list[Candidate] = []
     # (a disc for a ring, a copy of a detection: no rival of either)
     other_object: list[Candidate] = []
     s0, s1 = ctx.scale_range
     for c in todo:
-        if c.full.score < ctx.min_score:   # (its NFA too when over: a user lowered one, then
-            judge(ctx, c)                  # met the other, on a sonar tile)
-            c.declined = f"score {c.full.score:.3g} under min_score {ctx.min_score:.3g}" + (
+        if seen_score(ctx, c.full) < ctx.min_score:   # (its NFA too when over: a user lowered
+            judge(ctx, c)                  # one, then met the other, on a sonar tile)
+            view = seen_score(ctx, c.full)
+            view = f" ({view:.3g} of its points in view)" if view != c.full.score else ""
+            c.declined = f"score {c.full.score:.3g}{view} under min_score {ctx.min_score:.3g}" + (
                 f"; NFA {c.nfa:.3g} over max_nfa {ctx.max_nfa:.3g} too" if c.nfa > ctx.max_nfa
                 else "")
             continue
@@ -363,10 +387,11 @@ def rank(ctx: SearchContext, cands: list, gray: np.ndarray, min_confidence: floa
     runner_up = max(others, default=0.0)
     dets = []
     for c in accepted:
-        conf = confidence(c.work_score, runner_up)
+        own = seen_score(ctx, c.fit)    # (a look-alike's own score: raw, as before)
+        conf = confidence(own, runner_up)
         if conf < min_confidence:
             c.declined = (f"confidence {conf:.3g} under min_confidence {min_confidence:.3g} "
-                          f"(a look-alike scores {runner_up:.3g} to its {c.work_score:.3g}, "
+                          f"(a look-alike scores {runner_up:.3g} to its {own:.3g}, "
                           "coarse)")
             continue
         dets.append(to_detection(ctx, c, conf, gray))

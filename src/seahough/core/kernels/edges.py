@@ -208,6 +208,13 @@ def trace_segments(seeds, ix, iy, ang, nxs, nys, mag, index, steps, tol):
         e2 = s
         total = 0
         for side in range(2):
+            # the second side starts along the gradients summed over the first
+            # side's walk, a vector longer than 1: its cone of steps is wider
+            # (cos > 0.38 / length). A unit start on both sides was measured
+            # (2026-12-08): real pairs alike (docs/real_pairs.md: wreck steps
+            # 0.20 -> 0.22 % of the diagonal), but a frame after a bad one
+            # measured 1 of 5 times in place of 5 (tests/test_odometer.py) and
+            # oblique pool pairs answered wrong: kept as it is
             sign = 1.0 if side == 0 else -1.0
             tx = -ss * sign
             ty = sc * sign
