@@ -6,6 +6,10 @@ pool's floor, a test tank's), photographed from above by ``sim.frame_pair``
 frame or more apart). The previous frame placed one or several tiles off the
 true motion fits the grout lines as well as the true motion: an edge method
 must tell the copies apart by something else, or say it cannot.
+(The tiles' two shades are that something else here. A net of one shade,
+``sim.net``, has nothing: its pairs are declined, and the dead reckoning
+takes the copy its velocity predicts, flagged; docs/method.md, "A net of
+one shade".)
 
 Split: the **dev** floor (seed 7, tiles of 24 px, pairs 0-15) is the one
 motion/repeats.py was developed on; the **test** floors (seeds 7, 3, 11 with

@@ -1066,3 +1066,26 @@ def test_an_nfa_limit_is_a_choice_of_the_dead_reckoning(tmp_path):
     strict = {r["index"]: r for r in runs[1.0]}
     assert all(r["nfa"] <= 1.0 for r in strict.values() if r["status"] == "measured")
     assert any(strict[i]["status"] == "assumed" for i in weak), weak
+
+
+@pytest.mark.parametrize("jitter", [0.0, 0.3])
+def test_a_net_is_followed_by_its_velocity_and_says_so(tmp_path, jitter):
+    """A 40 px mesh crossed at 23 px a frame: a step moved by a mesh cell
+    fits the edges as well. A net-pen trial's track went back and forth,
+    320 px off, nothing flagged, exit 0. Each such step is now the copy
+    nearest the constant velocity's prediction, flagged ``repeated_texture``;
+    a perfect mesh's first step (no velocity yet) is the vote's copy, and
+    says so (its track is then off by a cell a frame: flagged throughout)."""
+    frames, mats = S.sequence(S.net((1200, 1600), mesh=40, seed=2, jitter=jitter,
+                                    holes=0.005 * (jitter > 0)),
+                              n_frames=8, frame_size=(240, 320), path="line", step=23.0, seed=2)
+    rows = run_odometry(frames, tmp_path, progress=False, mosaic=False, workers=1).rows
+    flagged = [r["flags"] for r in rows[1:]]
+    assert all(f.startswith("repeated_texture: the step is known up to the texture's period")
+               for f in flagged[1:]), flagged
+    xy, _ = _true_track(mats, (240, 320))
+    est = np.array([[r["x"], r["y"]] for r in rows])
+    if jitter:    # (the first step, the vote's, was right: the rest follow)
+        assert np.hypot(*(est - xy).T).max() < 3.0
+    else:
+        assert "the vote's copy (no velocity known yet)" in flagged[0]

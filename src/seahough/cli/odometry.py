@@ -143,7 +143,9 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
                        change since frame 0 (> 1: closer)
       confidence, nfa, score, overlap   the evidence of its step
       flags            why a step was not measured (below), or after_gap
-                       (measured, against a frame whose pose was assumed);
+                       (measured, against a frame whose pose was assumed),
+                       or repeated_texture (measured up to the period of a
+                       net or grating: the copy the velocity predicts);
                        empty otherwise
       dx, dy, rotation, scale_change    the scene's motion from the
                        previous frame (the camera moved the other way)
@@ -165,8 +167,9 @@ def odometry(frames, out, metres_per_pixel, altitude, focal_px, scale_range, ang
 
     \b
     Exit status: 0 every pair of frames was measured; 1 some frames are
-    flagged (unreadable, their motion could not be measured, or measured
-    after such a gap: see the CSV's flags column); 2 bad input.
+    flagged (unreadable, their motion could not be measured, measured
+    after such a gap or only up to a repeated texture's period: see the
+    CSV's flags column); 2 bad input.
 
     \b
     Example:

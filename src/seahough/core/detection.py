@@ -168,5 +168,16 @@ def confidence(score: float, runner_up: float) -> float:
     --------
     >>> round(confidence(1.0, 0.88), 2), round(confidence(0.55, 0.5), 2)
     (1.0, 0.1)
+
+    A runner-up as good is no distinction, whatever the scores (scores over
+    the points in view may pass 1: a copy of a net fitting at 1.008 left an
+    answer at 1.009 a confidence of 1; over 1, the share of the score).
+
+    >>> round(confidence(1.009, 1.008), 3), confidence(1.0, 1.0), confidence(0.5, 0.6)
+    (0.001, 0.0, 0.0)
     """
+    if not score > runner_up:
+        return 0.0
+    if runner_up >= 1.0:
+        return 0.0 if score - runner_up < 1e-9 else float(min(1.0, (score - runner_up) / score))
     return float(np.clip((score - runner_up) / max(1.0 - runner_up, 1e-9), 0.0, 1.0))

@@ -316,14 +316,18 @@ def _measure_frame(row, i, gray, feats, st: State, searcher: _Searcher, load):
     reasons = []
     res = None
     n = i - st.meas
-    if st.vel is not None:
-        pred_cum = compose(matrix_power(st.vel, n), st.meas_cum)
-        predicted = compose(pred_cum, invert_matrix(st.key_cum))
-        res, why = searcher.measure(key, gray, feats, predicted, None, n, "prior", ref_rate)
+    # the constant velocity's motion from a reference frame: it chooses among a
+    # repeated texture's copies in every search (repeats.nearest_copy)
+    pred_cum = compose(matrix_power(st.vel, n), st.meas_cum) if st.vel is not None else None
+    near = lambda ref: (None if pred_cum is None  # noqa: E731
+                        else compose(pred_cum, invert_matrix(ref_cum(st, ref))))
+    if pred_cum is not None:
+        res, why = searcher.measure(key, gray, feats, near(st.key), None, n, "prior", ref_rate)
         reasons.append(why)
     if res is None:
         base = compose(st.meas_cum, invert_matrix(st.key_cum))
-        res, why = searcher.measure(key, gray, feats, None, base, n, "full", ref_rate)
+        res, why = searcher.measure(key, gray, feats, None, base, n, "full", ref_rate,
+                                    near=near(st.key))
         reasons.append(why)
     if res is None and st.prev != st.meas and st.meas != st.key and n <= RECOVER_SPAN:
         # after a short gap (the last poses assumed: a bad frame, a fish), the
@@ -332,17 +336,17 @@ def _measure_frame(row, i, gray, feats, st: State, searcher: _Searcher, load):
         # for twice the motion (a good frame after one bad frame was flagged
         # no_match: its keyframe 5 frames back, the wide try too wide to vote)
         res, why = searcher.measure(load(st.meas), gray, feats, None, _IDENTITY, n, "recover",
-                                    ref_rate)
+                                    ref_rate, near=near(st.meas))
         reasons.append(why)
     if res is None and st.prev is not None and st.prev != st.key:
         prev = load(st.prev)
         res, why = searcher.measure(prev, gray, feats, None, _IDENTITY, i - st.prev, "previous",
-                                    ref_rate)
+                                    ref_rate, near=near(st.prev))
         reasons.append(why)
     if res is None:
         # the last attempt: the last measured frame, a wider shift region and wider ranges
         res, why = searcher.measure(load(st.meas), gray, feats, None, _IDENTITY, n, "wide",
-                                    ref_rate, widen=WIDEN)
+                                    ref_rate, widen=WIDEN, near=near(st.meas))
         reasons.append(why)
     if res is None:
         _assume(row, st, "low_confidence" if "low_confidence" in reasons else (
@@ -350,12 +354,19 @@ def _measure_frame(row, i, gray, feats, st: State, searcher: _Searcher, load):
                 "few_edges" if all(r == "few_edges" for r in reasons) else "no_match")))
         return
     if _doubtful(res, st, searcher.tuning):
-        res = _checked(res, i, gray, feats, st, searcher, load, ref_rate)
+        res = _checked(res, i, gray, feats, st, searcher, load, ref_rate, near(st.meas))
     row["status"] = "measured"
     row["_cum"] = compose(res.matrix, ref_cum(st, res.ref))
+    flags = []
     if res.ref == st.prev and st.prev != st.meas:
         # (its step is measured; its place rests on the guess of the frame before)
-        row["flags"] = f"after_gap: measured against frame {res.ref}, whose pose was assumed"
+        flags.append(f"after_gap: measured against frame {res.ref}, whose pose was assumed")
+    if getattr(res, "period", 0.0) > 0.0:   # (a net, a grating: repeats.nearest_copy)
+        flags.append(f"repeated_texture: the step is known up to the texture's period "
+                     f"({res.period:.0f} px); " + (
+                         "the copy nearest the constant-velocity prediction was taken"
+                         if pred_cum is not None else "the vote's copy (no velocity known yet)"))
+    row["flags"] = "; ".join(flags)
     row["ref"] = res.ref
     row["method"] = res.method
     row["confidence"] = res.confidence
@@ -410,7 +421,7 @@ def _doubtful(res, st: State, tuning) -> bool:
     return res.confidence < tuning.doubtful or res.method != "prior"
 
 
-def _checked(res, i, gray, feats, st: State, searcher: _Searcher, load, ref_rate):
+def _checked(res, i, gray, feats, st: State, searcher: _Searcher, load, ref_rate, near=None):
     """A doubtful keyframe measurement against the last measured frame: an
     old keyframe's peak can be a look-alike (a tile, a ripple one period on)
     that the nearer frame does not share, and an old keyframe of a scene in
@@ -438,7 +449,7 @@ def _checked(res, i, gray, feats, st: State, searcher: _Searcher, load, ref_rate
     # runner-up to be measured against (on the tiled pool it confirmed itself)
     n = i - st.meas
     check, _ = searcher.measure(load(st.meas), gray, feats, None, _IDENTITY, n, "previous",
-                                ref_rate)
+                                ref_rate, near=near)
     if check is None or (n > 1 and check.confidence <= res.confidence):
         return res
     implied = compose(res.matrix, compose(st.key_cum, invert_matrix(st.meas_cum)))

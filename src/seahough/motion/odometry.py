@@ -236,6 +236,14 @@ def run_odometry(frames, out_dir, *, metres_per_pixel=None, altitude=None, focal
       frame measured (its step, ``pair_matrix``, is) against a frame whose
       pose was assumed: its place on the track, and every later one's,
       carries that guess (the summary's ``after_gap`` lists these frames).
+    - ``repeated_texture: the step is known up to the texture's period (P
+      px); the copy nearest the constant-velocity prediction was taken``: a
+      frame of a net, a grating, a one-shade tiled floor, whose step moved
+      by a whole period fits its edges as well (``motion/repeats.py``): of
+      the copies, the one the last velocity predicts (before any velocity
+      is known: the vote's, said so). Right while the velocity changes by
+      less than half a period a frame; the flag says it is not measured
+      otherwise.
     """
     t_start = time.perf_counter()
     odo = Odometer(scale_range, angle_range, metres_per_pixel=metres_per_pixel,

@@ -26,7 +26,6 @@ from ..config import Config
 from ..core.features import Features
 from ..core.candidates import icp_subset
 from ..core.pattern import Pattern
-from ..core.ranking import confidence
 from ..core.refine import Pose, refine
 from .parallax import work_matrix
 
@@ -43,6 +42,9 @@ MIN_PERIODIC = 0.25
 HALF_FROM = 96
 #: How many periods (each tested both ways) at most.
 N_PERIODS = 4
+#: Of the autocorrelation's peaks, those at least this share of the highest
+#: are periods (the shortest first).
+PEAK_SHARE = 0.7
 
 
 def _spectrum(a: np.ndarray, shape) -> np.ndarray:
@@ -122,15 +124,16 @@ def _periods(m: np.ndarray, n: int, min_lag: float) -> np.ndarray:
     # a lattice repeats at every sum of its periods, as high: the shortest of
     # the peaks near the highest are the periods themselves
     v = win[iy, ix]
-    keep = v >= 0.5 * v.max()
+    keep = v >= PEAK_SHARE * v.max()
     iy, ix = iy[keep], ix[keep]
     order = np.argsort(np.hypot(dx[iy, ix], dy[iy, ix]), kind="stable")[:n]
     return np.stack([dx[iy[order], ix[order]], dy[iy[order], ix[order]]], 1).astype(float)
 
 
 def in_view(fit) -> float:
-    """A fit's score over the share of the points it keeps in view."""
-    return fit.score / max(fit.inside, 0.05)
+    """A fit's score over the share of the points it keeps in view (at
+    most 1: points just outside the image may match edges inside it)."""
+    return min(1.0, fit.score / max(fit.inside, 0.05))
 
 
 #: A copy whose fit on the refinement's subset of points (a third of the
@@ -145,7 +148,7 @@ def repeat_confidence(pattern: Pattern, features: Features, factor: float, pose:
     """(best score, the confidence it leaves, the periods) of the
     working-scale ``pose`` against itself moved by each period of the
     current frame (:func:`periods` of ``features``' gradient magnitude) and
-    refitted (scale and rotation kept): ``confidence(score, r)`` with ``r``
+    refitted (scale and rotation kept): ``copy_confidence(score, r)`` with ``r``
     the best score of the moved poses, scores of the points in view
     (:func:`in_view`), on all the pattern's scoring points (on the
     refinement's subset, a third of the time, one tiled floor's copy fitted
@@ -159,7 +162,9 @@ def repeat_confidence(pattern: Pattern, features: Features, factor: float, pose:
     frames have periods of their own: 8 copies a pair on the amphora wreck;
     about 2 ms less of a 50 ms real pair, 10 ms of a tiled floor's).
     """
-    shifts = periods(features.gradients.magnitude)
+    shifts = getattr(features, "_periods", None)   # (once a frame: several searches ask)
+    if shifts is None:
+        shifts = features._periods = periods(features.gradients.magnitude)
     if not len(shifts):
         return None
     pf = pattern.features(factor, config)
@@ -178,14 +183,31 @@ def repeat_confidence(pattern: Pattern, features: Features, factor: float, pose:
 
     best = fit(pose)
     # the copies' score under which the confidence stays at least ``keep``
-    harmless = (best - keep) / (1.0 - keep) if keep < 1.0 else -1.0
+    harmless = min((best - keep) / (1.0 - keep), best - keep * COPY_FLOOR) if keep < 1.0 else -1.0
     r = 0.0
     for dx, dy in shifts:
         for s in (1.0, -1.0):
             q = Pose(pose.a, pose.b, pose.tx + s * dx, pose.ty + s * dy)
             v = fit(q, sx, sy, sa) if harmless > SCREEN_MARGIN else 1.0
             r = max(r, v if v < harmless - SCREEN_MARGIN else fit(q))
-    return best, confidence(best, r), shifts
+    return best, copy_confidence(best, r), shifts
+
+
+#: :func:`copy_confidence` divides by at least this share left unexplained.
+COPY_FLOOR = 0.1
+
+
+def copy_confidence(best: float, copy: float) -> float:
+    """The answer's confidence against its best copy, as
+    :func:`~seahough.core.detection.confidence` (of what the copy leaves
+    unexplained, the share the answer explains), over at least
+    :data:`COPY_FLOOR`: an answer that fits a perfect net entirely (1.0)
+    had a confidence of 1 against a copy a mesh cell off at 0.997.
+
+    >>> copy_confidence(1.0, 0.997) < 0.05, copy_confidence(1.0, 0.88), round(copy_confidence(0.6, 0.5), 2)
+    (True, 1.0, 0.2)
+    """
+    return float(np.clip((best - copy) / max(1.0 - copy, COPY_FLOOR), 0.0, 1.0))
 
 
 
@@ -199,6 +221,12 @@ MIN_LOOK = 0.8
 #: A copy the grey levels chose must fit the edges at least this share as
 #: well as the answer (a copy one period away fits them alike).
 MIN_COPY = 0.9
+#: ... and only when no other shift correlates at this much or more: the
+#: grey levels of a one-shade net correlate alike a mesh cell away (the
+#: runner-up at 0.80-0.96, against 0.25-0.32 on a tiled floor of two shades
+#: and 0.33-0.49 on a net over a shaded bottom), and a net moved by 1, 3 or
+#: 5 cells was answered "not moved" at confidence 1 (a net-pen trial).
+MAX_LOOK_RIVAL = 0.7
 #: The grey levels are compared over shifts up to this share of the frame.
 LOOK_LAG = 0.5
 #: The grey levels are compared blurred by this share of the shortest period.
@@ -277,32 +305,47 @@ def declined_copy(m, got, decline: bool):
         "working px) fits the edges about as well, and the grey levels do not choose"))
 
 
+def _work_pose(m, pattern: Pattern, features: Features) -> Pose:
+    """The working-scale pose of the previous frame's origin under ``m``."""
+    g = features.gradients
+    mat = np.asarray(m.matrix, float)[:2]
+    x, y = g.to_work(*(mat[:, :2] @ list(pattern.origin) + mat[:, 2]))
+    return Pose(float(mat[0, 0]), float(mat[0, 1]), float(x), float(y))
+
+
 def resolve(m, res, pattern: Pattern, config: Config, decline: bool = True, region=None):
     """A pair's answer ``m`` (a :class:`~.pair.PairMeasure`) over a repeated
     texture: when the current frame has periods and the answer moved by one
     of them fits its edges about as well (:func:`repeat_confidence`), the
     frames' grey levels, correlated over shifts, choose the copy (tiles of
-    different shades, stains); the answer is moved there and refitted, its
-    confidence the correlation's margin over its next peak. When they do
-    not choose (:data:`MIN_LOOK_MARGIN`), the answer's confidence is what
-    its edges leave it (``decline``; else ``m`` stands: the dead reckoning,
-    whose prior and checks against the adjacent frame keep it among the
-    copies). A copy whose origin falls outside ``region`` (x0, y0, x1, y1,
-    full-resolution px: the search's) is not one the search looked for.
-    ``m`` as it is otherwise.
+    different shades, stains; :func:`_choose`). When they do not, the
+    answer's confidence is what its edges leave it (``decline``; else ``m``
+    stands). ``m`` as it is otherwise.
     """
     feats = res.features if res is not None else None
     if m is None or feats is None:
         return m
-    g = feats.gradients
-    mat = np.asarray(m.matrix, float)[:2]
-    ox, oy = pattern.origin
-    x, y = g.to_work(mat[0, 0] * ox + mat[0, 1] * oy + mat[0, 2],
-                     mat[1, 0] * ox + mat[1, 1] * oy + mat[1, 2])
-    pose = Pose(float(mat[0, 0]), float(mat[0, 1]), float(x), float(y))
+    pose = _work_pose(m, pattern, feats)
     got = repeat_confidence(pattern, feats, res.factor, pose, config, keep=m.confidence)
     if got is None or got[1] >= m.confidence:
         return m
+    chosen = _choose(m, got, pose, pattern, feats, res.factor, config, region)
+    return chosen if chosen is not None else declined_copy(m, got, decline)
+
+
+def _choose(m, got, pose: Pose, pattern: Pattern, feats: Features, factor: float,
+            config: Config, region=None):
+    """The copy of ``m`` the frames' grey levels choose (``got``:
+    :func:`repeat_confidence`'s), or None when they do not. Correlated over
+    shifts, blurred past the repeated lines, they must prefer one shift by
+    :data:`MIN_LOOK_MARGIN` with no rival at :data:`MAX_LOOK_RIVAL`; the
+    answer is moved there and refitted, its confidence the correlation's
+    margin over its next peak. A copy whose origin falls outside ``region``
+    (x0, y0, x1, y1, full-resolution px: the search's) is not one the search
+    looked for."""
+    g = feats.gradients
+    mat = np.asarray(m.matrix, float)[:2]
+    ox, oy = pattern.origin
     prev = cv2.resize(pattern.image, None, fx=g.fx, fy=g.fy, interpolation=cv2.INTER_AREA)
     # blurred over half the shortest period: the repeated lines (grout) fade,
     # the coarser shading that tells the copies apart stays
@@ -313,11 +356,19 @@ def resolve(m, res, pattern: Pattern, config: Config, decline: bool = True, regi
     hom = getattr(m, "homography", None)
     look = look_shift(prev, cur, work_matrix(mat if hom is None else hom, g.fx, g.fy), lag)
     if look is None:
-        return declined_copy(m, got, decline)
+        return None
     dx, dy, best, second = look
     margin = float(np.clip((best - second) / max(1e-9, 1.0 - second), 0.0, 1.0))
-    if margin < MIN_LOOK_MARGIN:
-        return declined_copy(m, got, decline)
+    if margin < MIN_LOOK_MARGIN or second >= MAX_LOOK_RIVAL:
+        return None
+    # grey levels that stay with the camera (a strobe's fall-off, a lens's
+    # shading) correlate as well with the frames not moved at all: they tell
+    # nothing of the scene (a one-shade net in the simulator's water: copies
+    # 1-3 mesh cells off "chosen" at a rival of 0.40). (Nor can they confirm
+    # a motion under a period: the frames not moved are as alike.)
+    still = look_shift(prev, cur, np.eye(3), 4)
+    if still is not None and still[2] >= best - MIN_LOOK_MARGIN:
+        return None
     # the edges' copy: copies lie a period apart (a smaller shift is the blurred
     # grey levels' own imprecision, or a camera's perspective). The grey levels
     # confirm it, however well they correlate (two frames of a camera that looks
@@ -326,22 +377,75 @@ def resolve(m, res, pattern: Pattern, config: Config, decline: bool = True, regi
     if math.hypot(dx, dy) < 0.5 * period:
         return replace(m, confidence=max(got[1], min(m.confidence, margin)))
     if best < MIN_LOOK:
-        return declined_copy(m, got, decline)
-    pf = pattern.features(res.factor, config)
-    fit = refine(Pose(pose.a, pose.b, pose.tx + dx, pose.ty + dy), pf.vx, pf.vy, pf.vangle,
-                 feats.edges, feats.index, radii=(2.0, 1.5, 1.25), iterations=6,
-                 angle_tol=math.radians(config.angle_tolerance), either=pattern.either,
-                 score_radius=max(1.25, config.match_radius * res.factor))
-    if in_view(fit) < MIN_COPY * got[0]:    # not a copy the edges agree with
-        return declined_copy(m, got, decline)
-    q = fit.pose
-    fx, fy = (float(v) for v in g.to_full(q.tx, q.ty))
+        return None
+    moved = _refit_copy(m, pattern, feats, factor, config, pose, dx, dy,
+                        MIN_COPY * got[0], fixed=False)
+    if moved is None:    # not a copy the edges agree with
+        return None
+    fx, fy = moved.matrix[:, :2] @ [ox, oy] + moved.matrix[:, 2]
     if region is not None and not (region[0] <= fx <= region[2] and region[1] <= fy <= region[3]):
-        return declined_copy(m, got, decline)
-    full = np.array([[q.a, q.b, 0.0], [-q.b, q.a, 0.0]])
-    full[:, 2] = [fx, fy] - full[:, :2] @ [ox, oy]
+        return None
     if hom is not None:   # (the homography moved as the origin was, full-resolution px)
         x0, y0 = mat @ [ox, oy, 1.0]
         d = np.array([[1.0, 0.0, fx - x0], [0.0, 1.0, fy - y0], [0.0, 0.0, 1.0]])
         hom = d @ np.asarray(hom, float)
-    return replace(m, matrix=full, confidence=margin, score=fit.score, homography=hom)
+    return replace(moved, confidence=margin, homography=hom)
+
+
+def _refit_copy(m, pattern: Pattern, features: Features, factor: float, config: Config,
+                pose: Pose, dx: float, dy: float, least: float, fixed: bool = True,
+                radii=(2.0, 1.5, 1.25)):
+    """``m`` moved by ``(dx, dy)`` working px and refitted (its scale and
+    turn kept when ``fixed``), or None when that copy fits the edges under
+    ``least`` (:func:`in_view`)."""
+    pf = pattern.features(factor, config)
+    fit = refine(Pose(pose.a, pose.b, pose.tx + dx, pose.ty + dy), pf.vx, pf.vy, pf.vangle,
+                 features.edges, features.index, radii=radii, iterations=6,
+                 angle_tol=math.radians(config.angle_tolerance), either=pattern.either,
+                 fix_scale=fixed, fix_angle=fixed,
+                 score_radius=max(1.25, config.match_radius * factor))
+    if in_view(fit) < least:
+        return None
+    q, (ox, oy) = fit.pose, pattern.origin
+    fx, fy = (float(v) for v in features.gradients.to_full(q.tx, q.ty))
+    full = np.array([[q.a, q.b, 0.0], [-q.b, q.a, 0.0]])
+    full[:, 2] = [fx, fy] - full[:, :2] @ [ox, oy]
+    return replace(m, matrix=full, score=fit.score)
+
+
+def nearest_copy(m, pattern: Pattern, features: Features, config: Config,
+                 min_confidence: float, near=None):
+    """For the dead reckoning: ``(m, period)``, with ``period`` the current
+    frame's shortest period in full-resolution px when the answer ``m`` (a
+    :class:`~.pair.PairMeasure`) moved by a period fits its edges about as
+    well (:func:`repeat_confidence` leaves it under ``min_confidence``) and
+    the grey levels do not tell the copies apart (:func:`_choose`; when they
+    do, their copy, and 0.0): the step is known only up to the texture's
+    period. Else ``(m, 0.0)``. Then, with ``near`` (the predicted 2x3
+    motion), the copy nearest the prediction is returned in its place: the
+    answer's turn and scale moved to the prediction's place and refitted,
+    from a capture radius of 0.4 period down (a net 23 px a frame,
+    predicted at +46 px, was answered +6, a mesh cell off, at the vote's
+    say: a net-pen trial). A copy there that fits the edges under
+    :data:`MIN_COPY` of the answer: ``(None, period)``, not measured.
+    """
+    g = features.gradients
+    pose = _work_pose(m, pattern, features)
+    got = repeat_confidence(pattern, features, g.factor, pose, config, keep=m.confidence)
+    if got is None or got[1] >= min_confidence:
+        return m, 0.0
+    chosen = _choose(m, got, pose, pattern, features, g.factor, config)
+    if chosen is not None:    # (the grey levels tell the copies apart: measured)
+        return chosen, 0.0
+    v = np.asarray(got[2], float)
+    period = float(np.hypot(v[0, 0] / g.fx, v[0, 1] / g.fy))
+    if near is None:
+        return m, period
+    q = _work_pose(replace(m, matrix=np.asarray(near, float)[:2]), pattern, features)
+    dx, dy = q.tx - pose.tx, q.ty - pose.ty
+    pw = float(np.hypot(*v[0]))     # (working px)
+    if math.hypot(dx, dy) < 0.25 * pw:   # (the answer is the copy the prediction is nearest)
+        return m, period
+    moved = _refit_copy(m, pattern, features, g.factor, config, pose, dx, dy, MIN_COPY * got[0],
+                        radii=(0.4 * pw, 0.25 * pw, 2.0, 1.5, 1.25))
+    return moved, period

@@ -33,6 +33,7 @@ from ..errors import SeahoughError
 from ..geometry import (angle_difference, apply_matrix, frame_centre, matrix_to_pose,
                         overlap, shift_origin, wrap_angle)
 from .pair import frame_factor, frame_features, measure_pair
+from .repeats import nearest_copy
 from .state import Frame
 
 __all__ = ["Measure", "Searcher", "REASONS", "WIDEN"]
@@ -58,6 +59,9 @@ class Measure:
     ref: int
     method: str
     nfa: float = float("nan")   # (judged only against OdometryTuning.max_nfa)
+    #: the current frame's period (full px) when the step is known only up to
+    #: it (a repeated texture: repeats.nearest_copy); 0.0 otherwise
+    period: float = 0.0
 
 
 class Searcher:
@@ -148,14 +152,16 @@ class Searcher:
         return sr, ar
 
     def measure(self, ref: Frame, gray, feats, predicted, base, n: int, method: str,
-                ref_rate: float | None = None, widen: int = 1):
+                ref_rate: float | None = None, widen: int = 1, near=None):
         """Motion of ``ref`` into the current frame: ``(Measure, "")``, or
         ``(None, reason)`` (one of :data:`REASONS`).
 
         ``predicted``: the expected motion (prior window around it); else
         ``base`` (the motion to the last measured frame) and the user's
         ranges widened over ``n`` frames, the shift region and the ranges
-        ``widen`` times the full search's."""
+        ``widen`` times the full search's. ``near``: the motion a search
+        without a prior window still expects (the constant velocity's), by
+        which a repeated texture's copy is chosen (default ``predicted``)."""
         pattern = ref.get_pattern(self.cfg)
         if pattern is None or len(feats.segments) < MIN_SEGMENTS:
             return None, "few_edges"
@@ -164,6 +170,7 @@ class Searcher:
         ox, oy = self.off
         if predicted is not None:
             predicted = shift_origin(predicted, ox, oy)
+        near = predicted if near is None else shift_origin(near, ox, oy)
         if base is not None:
             base = shift_origin(base, ox, oy)
         t = self.tuning
@@ -210,6 +217,13 @@ class Searcher:
             return None, "little_overlap"
         if ref_rate is not None and d.score / max(ov, 1e-6) < t.min_relative * ref_rate:
             return None, "low_confidence"
+        # a repeated texture (a net, a grating): the step is known up to its
+        # period; around a prediction, the copy nearest it is taken
+        d, period = nearest_copy(d, pattern, feats, self.prior_cfg if predicted is not None
+                                 else self.cfg, t.min_confidence, near)
+        if d is None:    # (the copy the prediction points at does not fit: no better)
+            return None, "low_confidence"
+        m = d.matrix
         if predicted is not None:
             # the refined pose must stay inside the prior window (else the
             # prior was wrong and the window cut the true peak off)
@@ -220,5 +234,5 @@ class Searcher:
             if not (x0 - slack <= dx <= x1 + slack and y0 - slack <= dy <= y1 + slack) or \
                     abs(ang) > t.prior_angle + 2.0:
                 return None, "no_match"
-        return Measure(shift_origin(m, -ox, -oy), float(d.confidence), float(d.score), ov,
-                       ref.index, method, float(d.nfa)), ""
+        return Measure(shift_origin(m, -ox, -oy), float(d.confidence), float(d.score),
+                       overlap(m, w, h), ref.index, method, float(d.nfa), period), ""

@@ -8,7 +8,7 @@ motion (:func:`frame_pair`), a rope crossing the frame (:func:`rope_scene`)
 or lying in a curve (:func:`curved_rope_scene`),
 a whole camera path (:func:`sequence`), survey frames over a seabed in
 relief that differ by parallax, or seen by a camera that looks ahead
-(:func:`relief_sequence`; a pool floor: :func:`tiled_floor`), a marker painted in a colour whose
+(:func:`relief_sequence`; a pool floor: :func:`tiled_floor`; a fish-farm net: :func:`net`), a marker painted in a colour whose
 red fades with distance in the water (:func:`colour_marker_scene`).
 
 Scenes are built from a background (:mod:`.backgrounds`: a real seabed photo
@@ -33,7 +33,7 @@ Examples
 ((120, 160, 3), (48, 48), (4, 2))
 """
 
-from .backgrounds import background, seabed, tiled_floor
+from .backgrounds import background, net, seabed, tiled_floor
 from .colour import PAINTS, BorderContrast, border_contrast, colour_marker_scene, matched_paint
 from .files import write_simulation
 from .markers import MARKERS, Truth, marker, paste_pattern, random_pose
@@ -51,6 +51,7 @@ __all__ = [
     "apply_water",
     "seabed",
     "tiled_floor",
+    "net",
     "background",
     "marker",
     "random_pose",

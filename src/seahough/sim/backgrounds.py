@@ -378,3 +378,63 @@ def background(shape: Shape = (480, 640), seed: int = 0,
     if rng.uniform() < 0.5:
         out = out[::-1]
     return np.ascontiguousarray(out)
+
+
+def net(shape: Shape = (480, 640), seed: int = 0, mesh: float = 40.0, twine: float = 3.0,
+        jitter: float = 0.0, holes: float = 0.0) -> np.ndarray:
+    """A fish-farm net seen flat: bright twine in a square mesh of one
+    shade over dark water, the trap of a repeated texture at its purest
+    (every mesh cell like the next, nothing to tell one place from the next
+    but ``jitter`` and ``holes``; :func:`tiled_floor`'s tiles come in
+    shades and carry a chain and stains).
+
+    Parameters
+    ----------
+    shape : (int, int)
+        ``(height, width)`` in pixels.
+    seed : int
+    mesh : float
+        The mesh's period in pixels (>= 8).
+    twine : float
+        The twine's thickness in pixels (0.5 to half the mesh).
+    jitter : float
+        Standard deviation of the knots' places, pixels (0: a perfect lattice).
+    holes : float
+        Share (0-1) of the twine's bars left out.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(height, width)`` uint8 grey image.
+
+    Examples
+    --------
+    >>> img = net((64, 96), mesh=16)
+    >>> img.shape, str(img.dtype), bool(img.max() > 150 and img.min() < 80)
+    ((64, 96), 'uint8', True)
+    """
+    h, w = _check_shape(shape)
+    if not mesh >= 8:
+        raise ParameterError(f"mesh must be at least 8 pixels, got {mesh!r}")
+    if not 0.5 <= twine <= mesh / 2:
+        raise ParameterError(f"twine must be 0.5 to mesh / 2 pixels, got {twine!r}")
+    if not (0 <= jitter and 0 <= holes <= 1):
+        raise ParameterError(f"jitter must be >= 0 and holes in [0, 1], got {jitter!r}, "
+                             f"{holes!r}")
+    rng = np.random.default_rng(seed)
+    ny, nx = int(h / mesh) + 3, int(w / mesh) + 3
+    o = rng.uniform(0, mesh, 2)
+    gy, gx = np.mgrid[0:ny, 0:nx].astype(np.float64)
+    kx = (gx - 1) * mesh + o[0] + rng.normal(0, jitter, gx.shape) * (jitter > 0)
+    ky = (gy - 1) * mesh + o[1] + rng.normal(0, jitter, gy.shape) * (jitter > 0)
+    layer = np.zeros((h, w), np.float32)
+    for dj, di in ((0, 1), (1, 0)):
+        for j in range(ny - dj):
+            for i in range(nx - di):
+                if holes and rng.random() < holes:
+                    continue
+                p1 = (int(round(kx[j, i] * 16)), int(round(ky[j, i] * 16)))
+                p2 = (int(round(kx[j + dj, i + di] * 16)), int(round(ky[j + dj, i + di] * 16)))
+                cv2.line(layer, p1, p2, 1.0, max(1, int(round(twine))), cv2.LINE_AA, shift=4)
+    layer = cv2.GaussianBlur(layer, (0, 0), 0.7)
+    return np.clip(60.0 + 110.0 * layer, 0, 255).astype(np.uint8)
